@@ -1,0 +1,26 @@
+# Two entry points: `make demo` (the main job) and `make test`. Each creates .venv when missing.
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test lint bench clean
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+demo: $(STAMP)
+	MUJOCO_GL=$${MUJOCO_GL:-egl} $(BIN)/workcell demo
+
+test: $(STAMP)
+	$(BIN)/ruff check .
+	MUJOCO_GL=$${MUJOCO_GL:-egl} $(BIN)/python -m pytest -n 2 -q
+
+bench: $(STAMP)
+	$(BIN)/python scripts/bench_modeller.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info

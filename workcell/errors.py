@@ -1,0 +1,60 @@
+"""The workcell exception family.
+
+Every user-facing error is a :class:`WorkcellError`; messages say what was wrong and
+what is valid (known names, allowed ranges).
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "CollisionError",
+    "GeometryError",
+    "GraspError",
+    "JointLimitError",
+    "KinematicsError",
+    "ModelError",
+    "ProgramError",
+    "ProtocolError",
+    "UnreachableError",
+    "WorkcellError",
+]
+
+
+class WorkcellError(Exception):
+    """Base class of every error the workcell package raises on purpose."""
+
+
+class ModelError(WorkcellError):
+    """A datamodel operation was refused (unknown or duplicate name, entity in use, bad file)."""
+
+
+class GeometryError(WorkcellError):
+    """Geometry is invalid (open or self-intersecting contour, singular transform, bad solid)."""
+
+
+class KinematicsError(WorkcellError):
+    """A kinematic computation failed or was given inconsistent input."""
+
+
+class UnreachableError(KinematicsError):
+    """No joint configuration reaches the requested pose."""
+
+
+class JointLimitError(KinematicsError):
+    """A joint value lies outside its limits."""
+
+
+class GraspError(WorkcellError):
+    """A grasp was refused: no movable part passed the grasp tests."""
+
+
+class CollisionError(WorkcellError):
+    """A collision occurred while the program was set to stop on collisions."""
+
+
+class ProgramError(WorkcellError):
+    """A command or program could not be parsed or run."""
+
+
+class ProtocolError(WorkcellError):
+    """A remote-protocol message was malformed or broke the protocol."""
