@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	MUJOCO_GL=$${MUJOCO_GL:-egl} $(BIN)/workcell demo
+	$(BIN)/workcell demo solids --save thesis_solids.json
 
 test: $(STAMP)
 	$(BIN)/ruff check .

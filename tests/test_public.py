@@ -1,0 +1,81 @@
+"""The public surface: names in __all__ resolve, README code runs, the demo CLI works."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+import workcell
+from workcell.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+MODULES = [
+    "workcell",
+    "workcell.errors",
+    "workcell.spatial",
+    "workcell.solids",
+    "workcell.modeller.surface",
+    "workcell.modeller.model",
+    "workcell.modeller.meshprops",
+    "workcell.modeller.world",
+    "workcell.modeller.storage",
+    "workcell.modeller.solids",
+    "workcell.modeller.sweeps",
+    "workcell.modeller.csg",
+    "workcell.modeller.patches",
+    "workcell.modeller.show",
+]
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_every_public_name_resolves(name):
+    mod = importlib.import_module(name)
+    assert mod.__all__, name
+    for attr in mod.__all__:
+        assert hasattr(mod, attr), f"{name}.{attr}"
+
+
+def test_errors_form_one_family():
+    for attr in workcell.errors.__all__:
+        assert issubclass(getattr(workcell.errors, attr), workcell.WorkcellError)
+    assert issubclass(workcell.UnreachableError, workcell.KinematicsError)
+
+
+def test_readme_python_example_runs(tmp_path, monkeypatch, capsys):
+    text = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert blocks
+    monkeypatch.chdir(tmp_path)
+    for code in blocks:
+        exec(compile(code, "README.md", "exec"), {})
+    out = capsys.readouterr().out.split()
+    # the README promises these printed values (thesis cube and parallelepiped)
+    assert out[:3] == ["1.0", "6", "9.0"]
+    assert (tmp_path / "parts.json").exists()
+
+
+def test_readme_starts_with_the_two_commands():
+    lines = (ROOT / "README.md").read_text().splitlines()
+    block = lines[lines.index("```sh") + 1 : lines.index("```sh") + 3]
+    assert block[0].startswith("make demo") and block[1].startswith("make test")
+    assert "make test" in (ROOT / ".ci" / "run").read_text()
+
+
+def test_demo_solids_json(tmp_path, capsys):
+    out_file = tmp_path / "m.json"
+    assert main(["demo", "solids", "--json", "--save", str(out_file)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["round_trip_exact"] is True
+    rows = {r["name"]: r for r in data["solids"]}
+    assert rows["cube1"]["volume"] == pytest.approx(1.0, abs=1e-12)
+    assert rows["para_block"]["volume"] == pytest.approx(9.0, abs=1e-12)
+    assert rows["para_object"]["volume"] == pytest.approx(9.0, abs=1e-12)
+    for r in data["solids"]:
+        assert r["valid"], r["name"]
+        if r["exact_volume"] is not None:
+            assert r["volume"] == pytest.approx(r["exact_volume"], rel=1e-12), r["name"]
+    assert out_file.exists()

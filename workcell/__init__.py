@@ -1,0 +1,48 @@
+"""workcell: a robotic workcell simulator on MuJoCo.
+
+Model parts with the solid modeller (:class:`Model`, :mod:`workcell.solids`), transform
+them with :mod:`workcell.spatial`; every deliberate error is a :class:`WorkcellError`.
+"""
+
+from workcell import solids, spatial
+from workcell.errors import (
+    CollisionError,
+    GeometryError,
+    GraspError,
+    JointLimitError,
+    KinematicsError,
+    ModelError,
+    ProgramError,
+    ProtocolError,
+    UnreachableError,
+    WorkcellError,
+)
+from workcell.modeller.meshprops import MassProperties, ValidityReport
+from workcell.modeller.model import EntityInfo, Model, Relation
+from workcell.modeller.surface import Surface
+from workcell.modeller.world import WorldPart
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "CollisionError",
+    "EntityInfo",
+    "GeometryError",
+    "GraspError",
+    "JointLimitError",
+    "KinematicsError",
+    "MassProperties",
+    "Model",
+    "ModelError",
+    "ProgramError",
+    "ProtocolError",
+    "Relation",
+    "Surface",
+    "UnreachableError",
+    "ValidityReport",
+    "WorkcellError",
+    "WorldPart",
+    "__version__",
+    "solids",
+    "spatial",
+]

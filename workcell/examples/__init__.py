@@ -1,0 +1,1 @@
+"""Example builders: the thesis's solids (and, as they land, its workcells)."""
