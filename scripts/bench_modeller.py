@@ -43,7 +43,9 @@ def holes_surface(n_holes: int = 200, segments: int = 16) -> tuple[Surface, Poly
     main = [(0, 0), (2 * side, 0), (2 * side, 2 * side), (0, 2 * side)]
     t = 2 * np.pi * np.arange(segments) / segments
     holes = [
-        np.column_stack([1 + 2 * (i % side) + 0.5 * np.cos(t), 1 + 2 * (i // side) + 0.5 * np.sin(t)])
+        np.column_stack(
+            [1 + 2 * (i % side) + 0.5 * np.cos(t), 1 + 2 * (i // side) + 0.5 * np.sin(t)]
+        )
         for i in range(n_holes)
     ]
     return Surface(main, holes, name="plate"), Polygon(main, [h[::-1] for h in holes])
@@ -68,8 +70,14 @@ def main() -> None:
 
     a, b = ours_sphere(), trimesh_sphere()
     assert abs(a.volume - b.volume) < 1e-9 * b.volume, (a.volume, b.volume)
-    rows.append(("sphere m=128 n=64 build+mesh", len(a.faces), median_time(ours_sphere, args.repeat),
-                 median_time(trimesh_sphere, args.repeat)))
+    rows.append(
+        (
+            "sphere m=128 n=64 build+mesh",
+            len(a.faces),
+            median_time(ours_sphere, args.repeat),
+            median_time(trimesh_sphere, args.repeat),
+        )
+    )
 
     surf, poly = holes_surface()
 
@@ -83,8 +91,14 @@ def main() -> None:
 
     a, b = ours_extrude(), trimesh_extrude()
     assert abs(a.volume - b.volume) < 1e-9 * b.volume, (a.volume, b.volume)
-    rows.append(("extrude, 200 holes build+mesh", len(a.faces), median_time(ours_extrude, args.repeat),
-                 median_time(trimesh_extrude, args.repeat)))
+    rows.append(
+        (
+            "extrude, 200 holes build+mesh",
+            len(a.faces),
+            median_time(ours_extrude, args.repeat),
+            median_time(trimesh_extrude, args.repeat),
+        )
+    )
 
     m = Model()
     solids.cylinder(m, "part", radius=0.1, height=0.2, n=32)
@@ -92,8 +106,12 @@ def main() -> None:
     m.attach("obj", "part")
     m.create("scene", "cell")
     rng = np.random.default_rng(0)
-    Ts = np.stack([spatial.euler(rng.uniform(-np.pi, np.pi, 3), translation=rng.uniform(-5, 5, 3))
-                   for _ in range(1000)])
+    Ts = np.stack(
+        [
+            spatial.euler(rng.uniform(-np.pi, np.pi, 3), translation=rng.uniform(-5, 5, 3))
+            for _ in range(1000)
+        ]
+    )
     m.attach_many("cell", "obj", Ts)
     m.world_mesh("part")  # block mesh cached, as in any real scene
 
@@ -109,13 +127,21 @@ def main() -> None:
 
     a, b = ours_scene(), trimesh_scene()
     assert abs(a.volume - b.volume) < 1e-9 * b.volume
-    rows.append(("scene of 1,000 instances to world mesh", len(a.faces), median_time(ours_scene, args.repeat),
-                 median_time(trimesh_scene, args.repeat)))
+    rows.append(
+        (
+            "scene of 1,000 instances to world mesh",
+            len(a.faces),
+            median_time(ours_scene, args.repeat),
+            median_time(trimesh_scene, args.repeat),
+        )
+    )
 
     print(f"{'case':40s} {'faces':>7s} {'ours ms':>9s} {'trimesh ms':>11s} {'ratio':>6s}  target")
     for name, faces, ours, theirs in rows:
         target = "<= 3x" + (", < 1 s" if "scene" in name else "")
-        print(f"{name:40s} {faces:7d} {ours * 1e3:9.2f} {theirs * 1e3:11.2f} {ours / theirs:6.2f}  {target}")
+        print(
+            f"{name:40s} {faces:7d} {ours * 1e3:9.2f} {theirs * 1e3:11.2f} {ours / theirs:6.2f}  {target}"
+        )
 
 
 if __name__ == "__main__":

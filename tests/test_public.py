@@ -61,7 +61,8 @@ def test_readme_python_example_runs(tmp_path, monkeypatch, capsys):
 def test_readme_starts_with_the_two_commands():
     lines = (ROOT / "README.md").read_text().splitlines()
     block = lines[lines.index("```sh") + 1 : lines.index("```sh") + 3]
-    assert block[0].startswith("make demo") and block[1].startswith("make test")
+    assert block[0].startswith("make demo")
+    assert block[1].startswith("make test")
     assert "make test" in (ROOT / ".ci" / "run").read_text()
 
 

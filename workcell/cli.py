@@ -24,18 +24,24 @@ def _demo_solids(args: argparse.Namespace) -> int:
     model.save(out)
     same = Model.load(out).to_dict() == model.to_dict()
     if args.json:
-        print(json.dumps({
-            "solids": [r.__dict__ for r in rows],
-            "model_file": str(out),
-            "round_trip_exact": same,
-            "wall_time_s": elapsed,
-        }))
+        print(
+            json.dumps(
+                {
+                    "solids": [r.__dict__ for r in rows],
+                    "model_file": str(out),
+                    "round_trip_exact": same,
+                    "wall_time_s": elapsed,
+                }
+            )
+        )
     else:
         print("The thesis's example solids (ch. 2-3), built by the workcell modeller\n")
         print(format_report(rows))
         sq = model.info("square1")
-        print(f"\nunit cube: one surface 'square1' pointed to {sq.pointed_by} times "
-              f"(cube1 x6, para_block x6 by instancing)")
+        print(
+            f"\nunit cube: one surface 'square1' pointed to {sq.pointed_by} times "
+            f"(cube1 x6, para_block x6 by instancing)"
+        )
         print(f"model saved to {out}; load gives an identical model: {same}")
         print(f"built, meshed and measured in {elapsed:.2f} s")
     return 0 if same and all(r.valid for r in rows) else 1
@@ -43,12 +49,18 @@ def _demo_solids(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``workcell`` command."""
-    parser = argparse.ArgumentParser(prog="workcell", description="Robotic workcell simulator on MuJoCo.")
+    parser = argparse.ArgumentParser(
+        prog="workcell", description="Robotic workcell simulator on MuJoCo."
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run a built-in example")
-    demo.add_argument("example", choices=["solids"], help="solids: the thesis's example solids (ch. 2-3)")
+    demo.add_argument(
+        "example", choices=["solids"], help="solids: the thesis's example solids (ch. 2-3)"
+    )
     demo.add_argument("--save", metavar="FILE.json", help="where to save the example model")
-    demo.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    demo.add_argument(
+        "--json", action="store_true", help="print one JSON object instead of a table"
+    )
     demo.set_defaults(func=_demo_solids)
     args = parser.parse_args(argv)
     try:

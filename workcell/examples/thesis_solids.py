@@ -67,7 +67,9 @@ def build() -> tuple[Model, dict[str, float]]:
     exact["cone"] = _ngon_area(24, 0.5) * 1.0 / 3
     solids.sphere(m, "sphere", radius=1.0, m=24, n=12)
     phi = np.linspace(-np.pi / 2, np.pi / 2, 2 * 12 + 1)
-    exact["sphere"] = _revolved_volume(np.column_stack([np.cos(phi), np.sin(phi)]), 24, 2 * np.pi / 24)
+    exact["sphere"] = _revolved_volume(
+        np.column_stack([np.cos(phi), np.sin(phi)]), 24, 2 * np.pi / 24
+    )
     solids.ellipsoid(m, "ellipsoid", radii=(1.0, 0.5, 0.25), m=24, n=12)
     exact["ellipsoid"] = exact["sphere"] * 0.125
     solids.torus(m, "torus", major_radius=1.0, minor_radius=0.25, m=32, n=12)
@@ -83,11 +85,23 @@ def build() -> tuple[Model, dict[str, float]]:
     solids.revolve(m, "ring_quarter", ring, angle=D90, n=12)
     exact["ring_quarter"] = _revolved_volume(ring, 12, D90 / 12)
     t = np.linspace(0.0, 1.0, 11)
-    solids.sweep(m, "taper", Surface.rectangle(0.2, 0.2, center=True), np.column_stack([0 * t, 0 * t, t]), scales=1 - 0.5 * t)
+    solids.sweep(
+        m,
+        "taper",
+        Surface.rectangle(0.2, 0.2, center=True),
+        np.column_stack([0 * t, 0 * t, t]),
+        scales=1 - 0.5 * t,
+    )
     exact["taper"] = 1.0 / 3 * (0.04 + 0.01 + 0.02)  # frustum h/3 (A1 + A2 + sqrt(A1 A2))
     solids.box(m, "block", size=(2.0, 2.0, 1.0))
     exact["block"] = 4.0
-    solids.difference(m, "block_minus_cylinder", "block", "cylinder", transforms=[None, spatial.translation(1, 1, -0.5)])
+    solids.difference(
+        m,
+        "block_minus_cylinder",
+        "block",
+        "cylinder",
+        transforms=[None, spatial.translation(1, 1, -0.5)],
+    )
     exact["block_minus_cylinder"] = 4.0 - _ngon_area(24, 0.5) * 1.0
     return m, exact
 
@@ -113,9 +127,20 @@ def report(model: Model, exact: dict[str, float]) -> list[SolidRow]:
         for name in model.list(level):
             p = model.properties((level, name))
             mesh = model.world_mesh((level, name))
-            valid = model.validity((level, name)).ok if level == "block" else bool(mesh.is_watertight)
+            valid = (
+                model.validity((level, name)).ok if level == "block" else bool(mesh.is_watertight)
+            )
             rows.append(
-                SolidRow(name, level, len(mesh.faces), p.area, p.volume, exact.get(name), tuple(p.centroid), valid)
+                SolidRow(
+                    name,
+                    level,
+                    len(mesh.faces),
+                    p.area,
+                    p.volume,
+                    exact.get(name),
+                    tuple(p.centroid),
+                    valid,
+                )
             )
     return rows
 
@@ -126,7 +151,9 @@ def format_report(rows: list[SolidRow]) -> str:
     lines = [head, "-" * len(head)]
     for r in rows:
         ex = f"{r.exact_volume:12.9f}" if r.exact_volume is not None else " " * 12
-        err = f"{abs(r.volume - r.exact_volume) / r.exact_volume:8.1e}" if r.exact_volume else " " * 8
+        err = (
+            f"{abs(r.volume - r.exact_volume) / r.exact_volume:8.1e}" if r.exact_volume else " " * 8
+        )
         lines.append(
             f"{r.name:22s} {r.level:6s} {r.faces:6d} {r.area:10.6f} {r.volume:12.9f} {ex} {err}  {'yes' if r.valid else 'NO'}"
         )

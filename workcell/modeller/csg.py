@@ -32,7 +32,9 @@ def _manifold(V: NDArray[np.float64], F: NDArray[np.int64], what: str) -> manifo
     return m
 
 
-def evaluate_boolean(op: str, operands: Sequence[tuple[Arrays, NDArray[np.float64]]], *, name: str) -> Arrays:
+def evaluate_boolean(
+    op: str, operands: Sequence[tuple[Arrays, NDArray[np.float64]]], *, name: str
+) -> Arrays:
     """Evaluate ``op`` over operand meshes, each (vertices, faces) placed by a 4x4 transform."""
     ms = []
     for i, ((V, F), T) in enumerate(operands):
@@ -44,25 +46,56 @@ def evaluate_boolean(op: str, operands: Sequence[tuple[Arrays, NDArray[np.float6
     elif op == "intersection":
         out = manifold3d.Manifold.batch_boolean(ms, manifold3d.OpType.Intersect)
     else:
-        out = ms[0] - manifold3d.Manifold.batch_boolean(ms[1:], manifold3d.OpType.Add) if len(ms) > 2 else ms[0] - ms[1]
+        out = (
+            ms[0] - manifold3d.Manifold.batch_boolean(ms[1:], manifold3d.OpType.Add)
+            if len(ms) > 2
+            else ms[0] - ms[1]
+        )
     res = out.to_mesh64()
-    return np.asarray(res.vert_properties, dtype=np.float64)[:, :3].copy(), np.asarray(res.tri_verts, dtype=np.int64).copy()
+    return np.asarray(res.vert_properties, dtype=np.float64)[:, :3].copy(), np.asarray(
+        res.tri_verts, dtype=np.int64
+    ).copy()
 
 
-def _make(op: str, model: Model, name: str, operands: Sequence[str], transforms: Sequence[ArrayLike | None] | None, colour: ArrayLike | None) -> str:
+def _make(
+    op: str,
+    model: Model,
+    name: str,
+    operands: Sequence[str],
+    transforms: Sequence[ArrayLike | None] | None,
+    colour: ArrayLike | None,
+) -> str:
     return model.create_boolean(name, op, list(operands), transforms, colour=colour)
 
 
-def union(model: Model, name: str, *operands: str, transforms: Sequence[ArrayLike | None] | None = None, colour: ArrayLike | None = None) -> str:
+def union(
+    model: Model,
+    name: str,
+    *operands: str,
+    transforms: Sequence[ArrayLike | None] | None = None,
+    colour: ArrayLike | None = None,
+) -> str:
     """Block ``name`` = the union of operand blocks (each optionally placed by a transform)."""
     return _make("union", model, name, operands, transforms, colour)
 
 
-def difference(model: Model, name: str, *operands: str, transforms: Sequence[ArrayLike | None] | None = None, colour: ArrayLike | None = None) -> str:
+def difference(
+    model: Model,
+    name: str,
+    *operands: str,
+    transforms: Sequence[ArrayLike | None] | None = None,
+    colour: ArrayLike | None = None,
+) -> str:
     """Block ``name`` = the first operand block minus all the others."""
     return _make("difference", model, name, operands, transforms, colour)
 
 
-def intersection(model: Model, name: str, *operands: str, transforms: Sequence[ArrayLike | None] | None = None, colour: ArrayLike | None = None) -> str:
+def intersection(
+    model: Model,
+    name: str,
+    *operands: str,
+    transforms: Sequence[ArrayLike | None] | None = None,
+    colour: ArrayLike | None = None,
+) -> str:
     """Block ``name`` = the common part of all operand blocks."""
     return _make("intersection", model, name, operands, transforms, colour)

@@ -213,7 +213,7 @@ def check_colour(colour: ArrayLike) -> tuple[float, ...]:
     """Validate an RGB or RGBA colour with components in [0, 1]; return RGBA."""
     try:
         c = tuple(float(x) for x in np.asarray(colour, dtype=np.float64).ravel())
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ModelError(f"colour must be 3 or 4 numbers in [0, 1], got {colour!r}") from exc
     if len(c) not in (3, 4) or not all(0.0 <= x <= 1.0 for x in c):
         raise ModelError(f"colour must be 3 or 4 numbers in [0, 1], got {colour!r}")
@@ -510,7 +510,8 @@ class Model:
             if len(new_names) != n:
                 raise ModelError(f"{len(new_names)} names but {n} transforms")
             if len(set(new_names)) != n:
-                raise ModelError("relation names given twice in one attach")
+                twice = sorted({nm for nm in new_names if new_names.count(nm) > 1})
+                raise ModelError(f"relation names given twice in one attach: {', '.join(twice)}")
             for nm in new_names:
                 if o.rels.index(nm) is not None:
                     raise ModelError(f"{o.label} already has a relation named '{nm}'")
@@ -524,7 +525,11 @@ class Model:
         self, o: _Entity, names: list[str], targets: list[_Entity], Ts: NDArray[np.float64]
     ) -> None:
         o.rels.add(names, targets, Ts)
-        counts = {targets[0]: len(targets)} if targets and targets.count(targets[0]) == len(targets) else _count(targets)
+        counts = (
+            {targets[0]: len(targets)}
+            if targets and targets.count(targets[0]) == len(targets)
+            else _count(targets)
+        )
         for t, k in counts.items():
             t.users[o] = t.users.get(o, 0) + k
         self._touch(o)

@@ -74,7 +74,9 @@ def planar_patches(
     off_plane = np.abs(np.einsum("knj,kj->kn", rel, z)).max(axis=1)
     if (off_plane > 1e-9 * scale).any():
         k = int(np.argmax(off_plane > 1e-9 * scale))
-        raise GeometryError(f"patch '{names[k]}' is not planar (a corner is {off_plane[k]:.3g} m off its plane)")
+        raise GeometryError(
+            f"patch '{names[k]}' is not planar (a corner is {off_plane[k]:.3g} m off its plane)"
+        )
     uv = np.stack([np.einsum("knj,kj->kn", rel, x), np.einsum("knj,kj->kn", rel, y)], axis=2)
     T = np.zeros((len(p), 4, 4))
     T[:, :3, 0], T[:, :3, 1], T[:, :3, 2], T[:, :3, 3], T[:, 3, 3] = x, y, z, p[:, 0], 1.0
@@ -87,7 +89,9 @@ def planar_patch(points: ArrayLike, *, name: str = "patch") -> tuple[Surface, ND
     return surfaces[0], T[0]
 
 
-def _frames(e1: NDArray[np.float64], e2: NDArray[np.float64], origin: NDArray[np.float64]) -> NDArray[np.float64]:
+def _frames(
+    e1: NDArray[np.float64], e2: NDArray[np.float64], origin: NDArray[np.float64]
+) -> NDArray[np.float64]:
     n = np.cross(e1, e2)
     ln = np.linalg.norm(n, axis=1)
     if (ln <= 1e-300).any():
@@ -133,13 +137,18 @@ def build_block(
     if name in model.list("block"):
         raise ModelError(f"a block named '{name}' already exists")
     new = {k: f"{name}.{k}" for k, s in surfaces.items() if isinstance(s, Surface)}
-    for k, s in surfaces.items():
+    for _k, s in surfaces.items():
         if not isinstance(s, Surface):
             model.surface(("surface", s))  # raises a clear ModelError when unknown
     taken = [n for n in new.values() if n in model.list("surface")]
     if taken:
-        raise ModelError(f"cannot build block '{name}': surface name(s) {', '.join(taken)} already exist")
-    groups = [(new.get(key) or surfaces[key], np.asarray(Ts, dtype=np.float64).reshape(-1, 4, 4)) for key, Ts in relations]
+        raise ModelError(
+            f"cannot build block '{name}': surface name(s) {', '.join(taken)} already exist"
+        )
+    groups = [
+        (new.get(key) or surfaces[key], np.asarray(Ts, dtype=np.float64).reshape(-1, 4, 4))
+        for key, Ts in relations
+    ]
     created: list[str] = []
     try:
         for key, full in new.items():

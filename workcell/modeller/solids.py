@@ -20,7 +20,12 @@ from numpy.typing import ArrayLike, NDArray
 from workcell import spatial
 from workcell.errors import GeometryError
 from workcell.modeller.model import Model
-from workcell.modeller.patches import UNIT_SQUARE, build_block, parallelogram_transforms, planar_patches
+from workcell.modeller.patches import (
+    UNIT_SQUARE,
+    build_block,
+    parallelogram_transforms,
+    planar_patches,
+)
 from workcell.modeller.surface import Surface
 from workcell.modeller.sweeps import revolve
 
@@ -71,12 +76,20 @@ def cube_face_transforms() -> NDArray[np.float64]:
     return np.stack(rows)
 
 
-def box(model: Model, name: str, *, size: ArrayLike = (1.0, 1.0, 1.0), colour: ArrayLike | None = None) -> str:
+def box(
+    model: Model, name: str, *, size: ArrayLike = (1.0, 1.0, 1.0), colour: ArrayLike | None = None
+) -> str:
     """Box ``size = (x, y, z)`` (m) with a corner at the origin: one unit square placed six times."""
     s = _triple(name, "size (x, y, z)", size)
     _positive(name, x=float(s[0]), y=float(s[1]), z=float(s[2]))
     Ts = np.einsum("ij,njk->nik", spatial.scaling(*s), cube_face_transforms())
-    return build_block(model, name, {"square": Surface(UNIT_SQUARE, name=f"{name}.square")}, [("square", Ts)], colour=colour)
+    return build_block(
+        model,
+        name,
+        {"square": Surface(UNIT_SQUARE, name=f"{name}.square")},
+        [("square", Ts)],
+        colour=colour,
+    )
 
 
 def cube(model: Model, name: str, *, size: float = 1.0, colour: ArrayLike | None = None) -> str:
@@ -86,7 +99,13 @@ def cube(model: Model, name: str, *, size: float = 1.0, colour: ArrayLike | None
 
 
 def cylinder(
-    model: Model, name: str, *, radius: float, height: float, n: int = 32, colour: ArrayLike | None = None
+    model: Model,
+    name: str,
+    *,
+    radius: float,
+    height: float,
+    n: int = 32,
+    colour: ArrayLike | None = None,
 ) -> str:
     """Cylinder about z from z=0 to ``height`` (m); ``n`` facets with vertices on the circle.
 
@@ -110,7 +129,9 @@ def cylinder(
     )
 
 
-def _sphere_parts(name: str, m: int, n: int) -> tuple[dict[str, Surface], list[tuple[str, NDArray[np.float64]]]]:
+def _sphere_parts(
+    name: str, m: int, n: int
+) -> tuple[dict[str, Surface], list[tuple[str, NDArray[np.float64]]]]:
     """Unit-sphere faces: n distinct faces per half slice, each placed m times, mirrored below."""
     alpha, beta = np.pi / (2 * n), 2 * np.pi / m
 
@@ -122,7 +143,10 @@ def _sphere_parts(name: str, m: int, n: int) -> tuple[dict[str, Surface], list[t
     lat = np.minimum(np.arange(n + 1) * alpha, np.pi / 2)
     lat[-1] = np.pi / 2
     corners = np.array(
-        [[p(lat[j], 0.0), p(lat[j], beta), p(lat[j + 1], beta), p(lat[j + 1], 0.0)] for j in range(n)]
+        [
+            [p(lat[j], 0.0), p(lat[j], beta), p(lat[j + 1], beta), p(lat[j + 1], 0.0)]
+            for j in range(n)
+        ]
     )
     names = [f"{name}.band{j}" for j in range(n)]
     patches, F = planar_patches(corners, names)
@@ -134,7 +158,13 @@ def _sphere_parts(name: str, m: int, n: int) -> tuple[dict[str, Surface], list[t
 
 
 def sphere(
-    model: Model, name: str, *, radius: float, m: int = 16, n: int = 8, colour: ArrayLike | None = None
+    model: Model,
+    name: str,
+    *,
+    radius: float,
+    m: int = 16,
+    n: int = 8,
+    colour: ArrayLike | None = None,
 ) -> str:
     """Sphere of ``radius`` (m) centred at the origin: ``m`` slices, ``n`` faces per half slice.
 
@@ -144,7 +174,13 @@ def sphere(
 
 
 def ellipsoid(
-    model: Model, name: str, *, radii: ArrayLike, m: int = 16, n: int = 8, colour: ArrayLike | None = None
+    model: Model,
+    name: str,
+    *,
+    radii: ArrayLike,
+    m: int = 16,
+    n: int = 8,
+    colour: ArrayLike | None = None,
 ) -> str:
     """Ellipsoid with semi-axes ``radii = (a, b, c)`` (m): a unit sphere's faces scaled unequally."""
     r = _triple(name, "radii (a, b, c)", radii)
@@ -158,7 +194,13 @@ def ellipsoid(
 
 
 def cone(
-    model: Model, name: str, *, radius: float, height: float, n: int = 32, colour: ArrayLike | None = None
+    model: Model,
+    name: str,
+    *,
+    radius: float,
+    height: float,
+    n: int = 32,
+    colour: ArrayLike | None = None,
 ) -> str:
     """Cone about z, base radius ``radius`` at z=0, apex at z=``height`` (m): a rotational sweep."""
     _positive(name, radius=radius, height=height)

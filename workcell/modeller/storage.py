@@ -80,7 +80,8 @@ def _field(d: Any, key: str, where: str, kinds: type | tuple[type, ...]) -> Any:
     if key not in d:
         raise ModelError(f"{where}: missing field '{key}'")
     v = d[key]
-    if not isinstance(v, kinds):
+    bool_ok = kinds is bool or (isinstance(kinds, tuple) and bool in kinds)
+    if not isinstance(v, kinds) or (isinstance(v, bool) and not bool_ok):  # True is an int
         raise ModelError(f"{where}: field '{key}' has the wrong type ({type(v).__name__})")
     return v
 
@@ -91,7 +92,7 @@ def model_from_dict(data: Any) -> Model:
 
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise ModelError(f"not a {FORMAT} document (missing or wrong 'format')")
-    if data.get("version") != VERSION:
+    if type(data.get("version")) is not int or data.get("version") != VERSION:
         raise ModelError(
             f"unsupported {FORMAT} version {data.get('version')!r}; this build reads {VERSION}"
         )
@@ -133,6 +134,8 @@ def model_from_dict(data: Any) -> Model:
             where = f"{_SECTIONS[level]}[{i}] '{d['name']}'"
             rels = _field(d, "relations", where, list)
             serial = _field(d, "serial", where, int)
+            if serial < 0:
+                raise ModelError(f"{where}: field 'serial' must be >= 0, got {serial}")
             e = m._levels[level][d["name"]]
             if rels:
                 names, targets, Ts = [], [], []
@@ -145,7 +148,7 @@ def model_from_dict(data: Any) -> Model:
                 try:
                     T = np.array(Ts, dtype=np.float64)
                     m.attach_many((level, d["name"]), targets, T, names=names)
-                except (ModelError, GeometryError, ValueError, TypeError) as exc:
+                except (ModelError, GeometryError, ValueError, TypeError, OverflowError) as exc:
                     raise ModelError(f"{where}: {exc}") from exc
             if e.boolean and e.rels.n < 2:
                 raise ModelError(f"{where}: a boolean block needs at least 2 operands")
@@ -169,6 +172,9 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
             f.write(text)
             f.flush()
             os.fsync(f.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual file mode
         os.replace(tmp, p)
     except BaseException:
         if os.path.exists(tmp):
@@ -177,8 +183,12 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
 
 
 def save(model: Model, path: str | os.PathLike) -> None:
-    """Write ``model`` to ``path`` as JSON, atomically."""
-    atomic_write_text(path, json.dumps(model_to_dict(model), separators=(",", ":")))
+    """Write ``model`` to ``path`` as JSON, atomically; a failed write raises ModelError."""
+    text = json.dumps(model_to_dict(model), separators=(",", ":"))
+    try:
+        atomic_write_text(path, text)
+    except OSError as exc:
+        raise ModelError(f"cannot write model file '{path}': {exc.strerror or exc}") from exc
 
 
 def load(path: str | os.PathLike) -> Model:

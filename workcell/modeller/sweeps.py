@@ -35,7 +35,9 @@ __all__ = ["extrude", "revolve", "sweep"]
 _FLIP = spatial.scaling(1.0, 1.0, -1.0)
 
 
-def _profile(model: Model, name: str, surface: Surface | str | ArrayLike) -> tuple[Surface, Surface | str]:
+def _profile(
+    model: Model, name: str, surface: Surface | str | ArrayLike
+) -> tuple[Surface, Surface | str]:
     """(geometry, what build_block gets): an existing surface entity is shared by name."""
     if isinstance(surface, str):
         s = model.surface(("surface", surface))
@@ -64,11 +66,19 @@ def extrude(
     s, ref = _profile(model, name, surface)
     if (height is None) == (direction is None):
         raise GeometryError(f"sweep '{name}': give exactly one of height or direction")
-    d = np.array([0.0, 0.0, height], dtype=np.float64) if direction is None else np.asarray(direction, dtype=np.float64)
+    d = (
+        np.array([0.0, 0.0, height], dtype=np.float64)
+        if direction is None
+        else np.asarray(direction, dtype=np.float64)
+    )
     if d.shape != (3,) or not np.all(np.isfinite(d)):
-        raise GeometryError(f"sweep '{name}': direction must be a finite 3-vector, got {direction!r}")
+        raise GeometryError(
+            f"sweep '{name}': direction must be a finite 3-vector, got {direction!r}"
+        )
     if abs(d[2]) <= 1e-12 * max(1.0, float(np.linalg.norm(d))):
-        raise GeometryError(f"sweep '{name}': the direction {d.tolist()} lies in the surface's plane (z = 0)")
+        raise GeometryError(
+            f"sweep '{name}': the direction {d.tolist()} lies in the surface's plane (z = 0)"
+        )
     a2, b2 = s.edges()
     a = np.column_stack([a2, np.zeros(len(a2))])
     e1 = np.column_stack([b2 - a2, np.zeros(len(a2))])
@@ -126,7 +136,9 @@ def revolve(
     a2, b2 = a2.copy(), b2.copy()
     a2[a2[:, 0] <= on_axis, 0] = 0.0
     b2[b2[:, 0] <= on_axis, 0] = 0.0
-    keep = [i for i in range(len(a2)) if a2[i, 0] > 0 or b2[i, 0] > 0]  # axis edges sweep to nothing
+    keep = [
+        i for i in range(len(a2)) if a2[i, 0] > 0 or b2[i, 0] > 0
+    ]  # axis edges sweep to nothing
     # corners start with the profile edge itself (never degenerate), counter-clockwise outside
     corners = np.array([[at(*b2[i], 0), at(*a2[i], 0), at(*a2[i], 1), at(*b2[i], 1)] for i in keep])
     patches, F = planar_patches(corners, [f"{name}.edge{i}" for i in keep])
@@ -140,7 +152,9 @@ def revolve(
     return build_block(model, name, surfaces, relations, colour=colour)
 
 
-def _transport_frames(P: NDArray[np.float64], D: NDArray[np.float64], up: NDArray[np.float64]) -> NDArray[np.float64]:
+def _transport_frames(
+    P: NDArray[np.float64], D: NDArray[np.float64], up: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Rotation-minimising frames (K, 3, 3): columns x, y, z with z along the directions D."""
     z = D / np.linalg.norm(D, axis=1, keepdims=True)
     x0 = up - z[0] * np.dot(up, z[0])
@@ -201,7 +215,9 @@ def sweep(
     if S.ndim == 1:
         S = np.column_stack([S, S])
     if S.shape != (len(P), 2) or not (S > 0).all():
-        raise GeometryError(f"sweep '{name}': scales must be positive, (K,) or (K, 2) for K = {len(P)}")
+        raise GeometryError(
+            f"sweep '{name}': scales must be positive, (K,) or (K, 2) for K = {len(P)}"
+        )
     R = _transport_frames(P, D, np.asarray(up, dtype=np.float64))
     A = np.zeros((len(P), 4, 4))  # section placements: translate, rotate, scale in-plane
     A[:, :3, :3] = R * np.concatenate([S, np.ones((len(P), 1))], axis=1)[:, None, :]

@@ -80,10 +80,14 @@ def merge_vertices(
     first = order[new]
     rep = first[inv]
     if not all(np.array_equal(c[rep], c) for c in q):  # hash collision: exact row grouping
-        _, first, inv = np.unique(np.column_stack(q), axis=0, return_index=True, return_inverse=True)
+        _, first, inv = np.unique(
+            np.column_stack(q), axis=0, return_index=True, return_inverse=True
+        )
         inv = inv.ravel()
     near = np.flatnonzero(
-        (np.abs(s[0] - r[0]) > 0.499) | (np.abs(s[1] - r[1]) > 0.499) | (np.abs(s[2] - r[2]) > 0.499)
+        (np.abs(s[0] - r[0]) > 0.499)
+        | (np.abs(s[1] - r[1]) > 0.499)
+        | (np.abs(s[2] - r[2]) > 0.499)
     )
     if len(near) > 1:  # a point near a rounding boundary may have a twin rounded the other way
         # pair the near-boundary points themselves: a cell's representative may lie up to
@@ -124,7 +128,9 @@ def _place(
     return Vw.reshape(-1, 3), Fw.reshape(-1, 3)
 
 
-def _group(targets: list, Ts: NDArray[np.float64]) -> list[tuple[object, NDArray[np.float64], NDArray[np.int64]]]:
+def _group(
+    targets: list, Ts: NDArray[np.float64]
+) -> list[tuple[object, NDArray[np.float64], NDArray[np.int64]]]:
     """Group relation transforms by target: (target, transforms, relation indices), first-seen order."""
     first: dict[int, int] = {}
     runs = []  # contiguous runs of one target, the usual case
@@ -136,7 +142,7 @@ def _group(targets: list, Ts: NDArray[np.float64]) -> list[tuple[object, NDArray
     for k, (a, _) in enumerate(runs):
         first.setdefault(id(targets[a]), k)
     out = []
-    for k, (a, b) in enumerate(runs):
+    for k, (a, _b) in enumerate(runs):
         if first[id(targets[a])] != k:
             continue
         same = [r for r in runs if targets[r[0]] is targets[a]]
