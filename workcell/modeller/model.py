@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     from workcell.modeller.meshprops import MassProperties, ValidityReport
     from workcell.modeller.world import WorldPart
 
-__all__ = ["BOOLEAN_OPS", "LEVELS", "EntityInfo", "Model", "Ref", "Relation"]
+__all__ = ["BOOLEAN_OPS", "LEVELS", "EntityInfo", "Model", "Ref", "Relation", "det3"]
 
 LEVELS = ("surface", "block", "object", "scene")
 CHILD = {"block": "surface", "object": "block", "scene": "object"}
@@ -161,6 +161,16 @@ class _Entity:
         return f"{self.level} '{self.name}'"
 
 
+def det3(T: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Determinants of the upper 3x3 blocks of a (N, 4, 4) or (N, 3, 3) stack (a . (b x c))."""
+    a, b, c = T[:, :3, 0], T[:, :3, 1], T[:, :3, 2]
+    return (
+        a[:, 0] * (b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1])
+        - a[:, 1] * (b[:, 0] * c[:, 2] - b[:, 2] * c[:, 0])
+        + a[:, 2] * (b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0])
+    )
+
+
 def check_transforms(Ts: ArrayLike, *, rigid: bool, what: str) -> NDArray[np.float64]:
     """Validate a (4, 4) or (N, 4, 4) stack of affine transforms and return it as float64.
 
@@ -184,7 +194,7 @@ def check_transforms(Ts: ArrayLike, *, rigid: bool, what: str) -> NDArray[np.flo
         raise GeometryError(
             f"{what}: matrix {i} is not affine (non-finite or last row not 0 0 0 1)"
         )
-    det = np.linalg.det(A[:, :3, :3])
+    det = det3(A)
     if (np.abs(det) < 1e-12).any():
         i = int(np.argmax(np.abs(det) < 1e-12))
         raise GeometryError(f"{what}: matrix {i} is singular (det = {det[i]:.3g})")
@@ -640,7 +650,7 @@ class Model:
                 surf = surf.transformed(T[np.ix_([0, 1], [0, 1, 3])], name=new_name)
             self.create("surface", new_name, surf, colour=e.colour)
             return new_name
-        Ts = e.rels.T.copy() if T is None else np.einsum("ij,njk->nik", T, e.rels.T)
+        Ts = e.rels.T.copy() if T is None else T @ e.rels.T
         if e.level == "scene":
             check_transforms(Ts, rigid=True, what=f"copy of {e.label}")
         c = self._levels[e.level]

@@ -82,7 +82,7 @@ def box(
     """Box ``size = (x, y, z)`` (m) with a corner at the origin: one unit square placed six times."""
     s = _triple(name, "size (x, y, z)", size)
     _positive(name, x=float(s[0]), y=float(s[1]), z=float(s[2]))
-    Ts = np.einsum("ij,njk->nik", spatial.scaling(*s), cube_face_transforms())
+    Ts = spatial.scaling(*s) @ cube_face_transforms()
     return build_block(
         model,
         name,
@@ -189,7 +189,7 @@ def ellipsoid(
     n = _count(name, "n", n, 1)
     surfaces, relations = _sphere_parts(name, m, n)
     S = spatial.scaling(*r)
-    relations = [(k, np.einsum("ij,njk->nik", S, Ts)) for k, Ts in relations]
+    relations = [(k, S @ Ts) for k, Ts in relations]
     return build_block(model, name, surfaces, relations, colour=colour)
 
 

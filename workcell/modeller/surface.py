@@ -26,10 +26,15 @@ __all__ = ["Surface"]
 _EPS = 1e-12
 
 
+def _next(p: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The array shifted by one along axis 0 (element i is p[i + 1], cyclically); cheap roll."""
+    return np.concatenate([p[1:], p[:1]])
+
+
 def _signed_area(p: NDArray[np.float64]) -> float:
     """Signed area (m^2) of a closed polygon, thesis formula 1/2 sum(x_i y_i+1 - x_i+1 y_i)."""
     x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    return 0.5 * float(np.dot(x, _next(y)) - np.dot(_next(x), y))
 
 
 def _clean_contour(points: ArrayLike, label: str, surface: str) -> NDArray[np.float64]:
@@ -61,8 +66,9 @@ def _clean_contour(points: ArrayLike, label: str, surface: str) -> NDArray[np.fl
 
 def _strictly_convex(p: NDArray[np.float64]) -> bool:
     """True when every turn has the same sign and the contour winds once (so it is simple)."""
-    e = np.roll(p, -1, axis=0) - p
-    turn = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
+    e = _next(p) - p
+    en = _next(e)
+    turn = e[:, 0] * en[:, 1] - e[:, 1] * en[:, 0]
     if not ((turn > 0).all() or (turn < 0).all()):
         return False
     heading = np.unwrap(np.arctan2(e[:, 1], e[:, 0]))
@@ -172,9 +178,7 @@ class Surface:
     @property
     def perimeter(self) -> float:
         """Total length (m) of all contours."""
-        return float(
-            sum(np.linalg.norm(np.roll(c, -1, axis=0) - c, axis=1).sum() for c in self.contours)
-        )
+        return float(sum(np.linalg.norm(_next(c) - c, axis=1).sum() for c in self.contours))
 
     @property
     def n_edges(self) -> int:
@@ -188,12 +192,22 @@ class Surface:
         the left of every edge.
         """
         starts = np.concatenate(self.contours)
-        ends = np.concatenate([np.roll(c, -1, axis=0) for c in self.contours])
+        ends = np.concatenate([_next(c) for c in self.contours])
         return starts, ends
 
     def triangulate(self) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """Triangulation (vertices (N, 2), faces (M, 3)), counter-clockwise seen from +z. Cached."""
         tri = self._tri  # type: ignore[attr-defined]
+        if tri is None and not self.holes and _strictly_convex(self.main):
+            k = len(self.main)  # convex, counter-clockwise: a fan is a conforming triangulation
+            faces = np.column_stack(
+                [np.zeros(k - 2, np.int64), np.arange(1, k - 1), np.arange(2, k)]
+            )
+            verts = self.main.copy()
+            verts.flags.writeable = False
+            faces.flags.writeable = False
+            tri = (verts, faces)
+            object.__setattr__(self, "_tri", tri)
         if tri is None:
             verts = np.concatenate(self.contours)
             ends = np.cumsum([len(c) for c in self.contours]).astype(np.uint32)

@@ -21,6 +21,7 @@ from scipy.spatial import cKDTree
 
 from workcell.errors import GeometryError
 from workcell.modeller.meshprops import MassProperties, mass_properties, orient_consistently
+from workcell.modeller.model import det3
 
 if TYPE_CHECKING:
     from workcell.modeller.model import _Entity
@@ -122,7 +123,7 @@ def _place(
     offs = (np.arange(len(Ts)) * len(V))[:, None, None]
     Fw = F + offs
     if flip is None:
-        flip = np.linalg.det(Ts[:, :3, :3]) < 0
+        flip = det3(Ts) < 0
     if flip.any():
         Fw[flip] = Fw[flip][:, :, ::-1]
     return Vw.reshape(-1, 3), Fw.reshape(-1, 3)
@@ -182,7 +183,7 @@ def _block_arrays(e: _Entity) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     else:
         Vs, Fs, rel_of_face = [], [], []
         base = 0
-        flips = np.linalg.det(e.rels.T[:, :3, :3]) < 0
+        flips = det3(e.rels.T) < 0
         for t, Ts, idx in _group(e.rels.targets, e.rels.T):
             SV, SF = _surface_arrays(t)
             Vw, Fw = _place(SV, SF, Ts, flips[idx])
