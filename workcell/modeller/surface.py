@@ -121,6 +121,7 @@ class Surface:
         object.__setattr__(self, "holes", tuple(hs))
         object.__setattr__(self, "name", name)
         object.__setattr__(self, "_tri", None)
+        object.__setattr__(self, "_convex", not hs and _strictly_convex(m))
 
     # ---------------------------------------------------------------- constructors
     @classmethod
@@ -198,7 +199,7 @@ class Surface:
     def triangulate(self) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """Triangulation (vertices (N, 2), faces (M, 3)), counter-clockwise seen from +z. Cached."""
         tri = self._tri  # type: ignore[attr-defined]
-        if tri is None and not self.holes and _strictly_convex(self.main):
+        if tri is None and self._convex:  # type: ignore[attr-defined]
             k = len(self.main)  # convex, counter-clockwise: a fan is a conforming triangulation
             faces = np.column_stack(
                 [np.zeros(k - 2, np.int64), np.arange(1, k - 1), np.arange(2, k)]

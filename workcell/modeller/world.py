@@ -134,12 +134,11 @@ def _group(
 ) -> list[tuple[object, NDArray[np.float64], NDArray[np.int64]]]:
     """Group relation transforms by target: (target, transforms, relation indices), first-seen order."""
     first: dict[int, int] = {}
-    runs = []  # contiguous runs of one target, the usual case
-    start = 0
-    for i in range(1, len(targets) + 1):
-        if i == len(targets) or targets[i] is not targets[start]:
-            runs.append((start, i))
-            start = i
+    if not targets:
+        return []
+    ids = np.fromiter(map(id, targets), dtype=np.int64, count=len(targets))
+    cut = np.flatnonzero(ids[1:] != ids[:-1]) + 1  # contiguous runs of one target, the usual case
+    runs = list(zip([0, *cut.tolist()], [*cut.tolist(), len(targets)], strict=True))
     for k, (a, _) in enumerate(runs):
         first.setdefault(id(targets[a]), k)
     out = []
