@@ -9,6 +9,7 @@ from __future__ import annotations
 import manifold3d
 import numpy as np
 import pytest
+from helpers import check_solid, ngon_area
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
@@ -22,20 +23,6 @@ RTOL = 1e-12
 
 def _rel(a, b):
     return abs(a - b) / max(abs(b), 1e-300)
-
-
-def _ngon_area(n, r):
-    return 0.5 * n * r**2 * np.sin(2 * np.pi / n)
-
-
-def _check_solid(model, name):
-    mesh = model.world_mesh(name)
-    assert mesh.is_watertight
-    assert mesh.is_winding_consistent
-    assert mesh.volume > 0
-    report = model.validity(name)
-    assert report.ok, report.problems
-    return mesh
 
 
 @pytest.fixture
@@ -60,7 +47,7 @@ def two_cubes():
 def test_two_offset_boxes(two_cubes, op, volume, x_range):
     m = two_cubes
     assert getattr(solids, op)(m, "r", "a", "b") == "r"
-    mesh = _check_solid(m, "r")
+    mesh = check_solid(m, "r")
     p = m.properties("r")
     assert _rel(p.volume, volume) < RTOL
     x0, x1 = x_range
@@ -81,7 +68,7 @@ def test_operand_transforms_are_applied(op, volume):
     m = workcell.Model()
     solids.cube(m, "a", size=1.0)
     getattr(solids, op)(m, "r", "a", "a", transforms=[None, spatial.translation(0.5, 0, 0)])
-    _check_solid(m, "r")
+    check_solid(m, "r")
     assert _rel(m.properties("r").volume, volume) < RTOL
     assert m.pointed_by("a") == 2
 
@@ -92,7 +79,7 @@ def test_non_rigid_and_reflected_operand_transforms():
     # a cube stretched 2x along x, unioned with its mirror image in x = 0: [-2, 2] x [0,1]^2
     S = spatial.scaling(2.0, 1.0, 1.0)
     solids.union(m, "u", "a", "a", transforms=[S, spatial.scaling(-1.0, 1.0, 1.0) @ S])
-    mesh = _check_solid(m, "u")
+    mesh = check_solid(m, "u")
     assert _rel(m.properties("u").volume, 4.0) < RTOL
     np.testing.assert_allclose(mesh.bounds, [[-2, 0, 0], [2, 1, 1]], atol=1e-12)
     # the mirror alone minus a rotated copy: [-1, 0] x [0, 1]^2 minus the same turned 90 deg
@@ -100,7 +87,7 @@ def test_non_rigid_and_reflected_operand_transforms():
     solids.difference(
         m, "d", "a", "a", transforms=[spatial.scaling(-1.0, 1.0, 1.0), spatial.rot_z(np.pi)]
     )
-    _check_solid(m, "d")
+    check_solid(m, "d")
     assert _rel(m.properties("d").volume, 1.0) < 1e-12
 
 
@@ -162,13 +149,13 @@ def test_box_minus_cylinder_through_hole(n):
     solids.box(m, "b", size=(2.0, 2.0, 1.0))
     solids.cylinder(m, "c", radius=r, height=3.0, n=n)
     solids.difference(m, "d", "b", "c", transforms=[None, spatial.translation(1.0, 1.0, -1.0)])
-    mesh = _check_solid(m, "d")
-    exact = 4.0 - _ngon_area(n, r) * 1.0
+    mesh = check_solid(m, "d")
+    exact = 4.0 - ngon_area(n, r) * 1.0
     p = m.properties("d")
     assert _rel(p.volume, exact) < RTOL
     assert _rel(p.volume, _manifold_box_minus_cylinder((2, 2, 1), r, 3.0, n, (1, 1, -1))) < 1e-12
     # area: the box minus two n-gons, plus the n side rectangles of the hole
-    area = 2 * (4 + 2 + 2) - 2 * _ngon_area(n, r) + n * 2 * r * np.sin(np.pi / n) * 1.0
+    area = 2 * (4 + 2 + 2) - 2 * ngon_area(n, r) + n * 2 * r * np.sin(np.pi / n) * 1.0
     assert _rel(p.area, area) < 1e-12
     assert mesh.euler_number == 0  # a through hole: genus 1
     np.testing.assert_allclose(p.centroid, [1.0, 1.0, 0.5], atol=1e-12)
@@ -182,9 +169,9 @@ def test_box_minus_blind_hole():
     solids.difference(
         m, "d", "b", "c", transforms=[None, spatial.translation(1.0, 1.0, 1.0 - depth)]
     )
-    mesh = _check_solid(m, "d")
+    mesh = check_solid(m, "d")
     assert mesh.euler_number == 2
-    assert _rel(m.properties("d").volume, 4.0 - _ngon_area(n, r) * depth) < RTOL
+    assert _rel(m.properties("d").volume, 4.0 - ngon_area(n, r) * depth) < RTOL
 
 
 def test_three_operands():
@@ -194,13 +181,13 @@ def test_three_operands():
     solids.cylinder(m, "c", radius=r, height=2.0, n=n)
     T = [None, spatial.translation(0.75, 0.5, -0.5), spatial.translation(2.25, 0.5, -0.5)]
     solids.difference(m, "d", "b", "c", "c", transforms=T)
-    mesh = _check_solid(m, "d")
+    mesh = check_solid(m, "d")
     assert mesh.euler_number == -2  # two through holes
-    assert _rel(m.properties("d").volume, 3.0 - 2 * _ngon_area(n, r)) < RTOL
+    assert _rel(m.properties("d").volume, 3.0 - 2 * ngon_area(n, r)) < RTOL
     solids.cube(m, "q", size=1.0)
     Tq = [None, spatial.translation(1, 0, 0), spatial.translation(2, 0, 0)]
     solids.union(m, "u", "q", "q", "q", transforms=Tq)
-    _check_solid(m, "u")
+    check_solid(m, "u")
     assert _rel(m.properties("u").volume, 3.0) < RTOL
     Ti = [None, spatial.translation(0.5, 0, 0), spatial.translation(0.25, 0.5, 0)]
     solids.intersection(m, "i", "q", "q", "q", transforms=Ti)
@@ -220,9 +207,9 @@ def test_far_from_origin_matches_origin():
             "c",
             transforms=[spatial.translation(x, 0, 0), spatial.translation(x + 1.0, 1.0, -1.0)],
         )
-        _check_solid(m, name)
+        check_solid(m, name)
     near, far = m.properties("near"), m.properties("far")
-    exact = 4.0 - _ngon_area(n, r)
+    exact = 4.0 - ngon_area(n, r)
     assert _rel(near.volume, exact) < 1e-12
     assert _rel(far.volume, near.volume) < 1e-9
     assert _rel(far.area, near.area) < 1e-9
@@ -235,7 +222,7 @@ def test_boolean_of_boolean():
     solids.cube(m, "a", size=1.0)
     solids.union(m, "u", "a", "a", transforms=[None, spatial.translation(1, 0, 0)])  # 2 x 1 x 1
     solids.difference(m, "d", "u", "a", transforms=[None, spatial.translation(0.5, 0.5, 0.5)])
-    _check_solid(m, "d")
+    check_solid(m, "d")
     assert _rel(m.properties("d").volume, 2.0 - 0.5 * 0.5 * 0.5 * 2) < RTOL
     m.set_transform("u", "op2", spatial.translation(0.5, 0, 0))  # inner union now 1.5 long
     # removed part: [0.5, 1.5] x [0.5, 1] x [0.5, 1] within [0, 1.5] x [0, 1]^2
@@ -312,7 +299,7 @@ def test_set_surface_on_operand_surface_invalidates(two_cubes):
         m.world_mesh("d")
     # put the square back (as a new, equal Surface): the boolean is valid again
     m.set_surface("a.square", Surface([(0, 0), (1, 0), (1, 1), (0, 1)]))
-    _check_solid(m, "d")
+    check_solid(m, "d")
     assert _rel(m.properties("d").volume, 0.5) < RTOL
 
 

@@ -12,6 +12,7 @@ import warnings
 
 import numpy as np
 import pytest
+from helpers import THESIS_ROWS
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, rule
@@ -27,14 +28,6 @@ from workcell.modeller.world import reoriented_relations
 D90 = math.pi / 2
 UNIT_SQUARE = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
 # the thesis's SRT rows for cube1 (§2), radians
-THESIS_ROWS = [
-    spatial.srt(rotation=(D90, 0, 0)),
-    spatial.srt(rotation=(D90, 0, 0), translation=(0, 1, 0)),
-    spatial.srt(rotation=(0, -D90, 0)),
-    spatial.srt(rotation=(0, -D90, 0), translation=(1, 0, 0)),
-    spatial.srt(),
-    spatial.srt(translation=(0, 0, 1)),
-]
 
 
 def thesis_cube(m: Model | None = None) -> Model:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from helpers import check_solid, ngon_area, snapshot
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
@@ -23,32 +24,6 @@ RTOL = 1e-12
 
 def _rel(a, b):
     return abs(a - b) / max(abs(b), 1e-300)
-
-
-def _ngon_area(n, r):
-    return 0.5 * n * r**2 * np.sin(2 * np.pi / n)
-
-
-def _snapshot(model):
-    """Everything a failed constructor must leave alone: names, reference counts, relations."""
-    out = {}
-    for level, names in model.list().items():
-        for nm in names:
-            info = model.info((level, nm))
-            out[(level, nm)] = (info.pointed_by, info.n_relations)
-    return out
-
-
-def _check_solid(model, name):
-    """World mesh is a closed, consistently and outwardly wound solid; our validity agrees."""
-    mesh = model.world_mesh(name)
-    assert isinstance(mesh, trimesh.Trimesh)
-    assert mesh.is_watertight
-    assert mesh.is_winding_consistent
-    assert mesh.volume > 0
-    report = model.validity(name)
-    assert report.ok, report.problems
-    return mesh
 
 
 def _check_mass_properties(model, name, rtol=1e-9):
@@ -76,7 +51,7 @@ def _check_mass_properties(model, name, rtol=1e-9):
 def test_cube_volume_inertia_centroid(size):
     m = workcell.Model()
     assert solids.cube(m, "c", size=size) == "c"
-    _check_solid(m, "c")
+    check_solid(m, "c")
     p = _check_mass_properties(m, "c")
     assert _rel(p.volume, size**3) < RTOL
     assert _rel(p.area, 6 * size**2) < RTOL
@@ -122,8 +97,8 @@ def test_box_parallelepiped_three_ways():
         assert _rel(p.area, 2 * (a * b + b * c + a * c)) < RTOL, name
         np.testing.assert_allclose(p.centroid, [a / 2, b / 2, c / 2], rtol=RTOL)
         np.testing.assert_allclose(p.inertia, expected_inertia, rtol=0, atol=1e-12 * 9)
-    _check_solid(m, "box")
-    _check_solid(m, "para")
+    check_solid(m, "box")
+    check_solid(m, "para")
     assert m.validity("para_obj").ok
     # the copy and the object share cube1's square: 6 (cube1) + 6 (para) pointers
     assert m.pointed_by("cube1.square") == 12
@@ -134,7 +109,7 @@ def test_box_parallelepiped_three_ways():
 
 
 def _cylinder_expect(r, h, n):
-    base = _ngon_area(n, r)
+    base = ngon_area(n, r)
     vol = base * h
     area = 2 * base + n * 2 * r * np.sin(np.pi / n) * h
     izz = vol * r**2 * (2 + np.cos(2 * np.pi / n)) / 6
@@ -143,7 +118,7 @@ def _cylinder_expect(r, h, n):
 
 
 def _check_cylinder(m, name, r, h, n):
-    mesh = _check_solid(m, name)
+    mesh = check_solid(m, name)
     p = _check_mass_properties(m, name)
     vol, area, inertia = _cylinder_expect(r, h, n)
     assert _rel(p.volume, vol) < 1e-11
@@ -239,7 +214,7 @@ def _sorted_rows(v):
 def test_sphere_against_convex_hull(r, m_, n):
     m = workcell.Model()
     assert solids.sphere(m, "s", radius=r, m=m_, n=n) == "s"
-    mesh = _check_solid(m, "s")
+    mesh = check_solid(m, "s")
     p = _check_mass_properties(m, "s")
     ref = _sphere_vertices(r, m_, n)
     v = np.array(mesh.vertices)
@@ -300,7 +275,7 @@ def test_ellipsoid_is_scaled_sphere(radii):
     m = workcell.Model()
     solids.sphere(m, "s", radius=r, m=m_, n=n)
     assert solids.ellipsoid(m, "e", radii=radii, m=m_, n=n) == "e"
-    _check_solid(m, "e")
+    check_solid(m, "e")
     p = _check_mass_properties(m, "e")
     ps = m.properties("s")
     assert _rel(p.volume, ps.volume * a * b * c / r**3) < RTOL
@@ -324,9 +299,9 @@ def test_ellipsoid_is_scaled_sphere(radii):
 def test_cone_exact_pyramid(r, h, n):
     m = workcell.Model()
     assert solids.cone(m, "co", radius=r, height=h, n=n) == "co"
-    mesh = _check_solid(m, "co")
+    mesh = check_solid(m, "co")
     p = _check_mass_properties(m, "co")
-    base = _ngon_area(n, r)
+    base = ngon_area(n, r)
     vol = base * h / 3
     slant = np.sqrt(h**2 + (r * np.cos(np.pi / n)) ** 2)
     area = base + n * r * np.sin(np.pi / n) * slant
@@ -352,10 +327,10 @@ def _torus_profile(R, rho, n):
 def test_torus_exact_and_vs_trimesh(R, rho, m_, n):
     m = workcell.Model()
     assert solids.torus(m, "t", major_radius=R, minor_radius=rho, m=m_, n=n) == "t"
-    mesh = _check_solid(m, "t")
+    mesh = check_solid(m, "t")
     p = _check_mass_properties(m, "t")
     # exact m-step revolve of a polygon: V = m sin(2 pi/m) * (area * centroid radius)
-    vol = m_ * np.sin(2 * np.pi / m_) * _ngon_area(n, rho) * R
+    vol = m_ * np.sin(2 * np.pi / m_) * ngon_area(n, rho) * R
     assert _rel(p.volume, vol) < 1e-11
     prof = _torus_profile(R, rho, n)
     ref = trimesh.creation.revolve(np.vstack([prof, prof[:1]]), sections=m_)
@@ -380,7 +355,7 @@ def test_torus_random(R, frac, m_, n):
     mesh = m.world_mesh("t")
     assert mesh.is_watertight
     assert mesh.is_winding_consistent
-    vol = m_ * np.sin(2 * np.pi / m_) * _ngon_area(n, rho) * R
+    vol = m_ * np.sin(2 * np.pi / m_) * ngon_area(n, rho) * R
     assert _rel(m.properties("t").volume, vol) < 1e-10
 
 
@@ -401,7 +376,7 @@ def _build_all(m):
 def test_every_solid_is_valid_and_matches_trimesh_mass_properties():
     m = workcell.Model()
     for name in _build_all(m):
-        _check_solid(m, name)
+        check_solid(m, name)
         _check_mass_properties(m, name)
         assert m.level_of(name) == "block"
 
@@ -520,10 +495,10 @@ def test_torus_faces_point_away_from_the_core_circle():
 def test_bad_parameters_raise_and_change_nothing(shape, params):
     m = workcell.Model()
     solids.cube(m, "existing", size=1.0)
-    before = _snapshot(m)
+    before = snapshot(m)
     with pytest.raises(GeometryError):
         getattr(solids, shape)(m, "new", **params)
-    assert _snapshot(m) == before
+    assert snapshot(m) == before
     assert not m.exists("new")
     # the name is still free: the same call with good parameters works
     solids.cube(m, "new", size=1.0)
@@ -542,10 +517,10 @@ def test_name_clash_is_refused_and_changes_nothing(shape):
     m = workcell.Model()
     getattr(solids, shape)(m, "x", **params)
     v0 = m.properties("x").volume
-    before = _snapshot(m)
+    before = snapshot(m)
     with pytest.raises(ModelError):
         getattr(solids, shape)(m, "x", **params)
-    assert _snapshot(m) == before
+    assert snapshot(m) == before
     assert m.properties("x").volume == v0
 
 

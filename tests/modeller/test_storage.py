@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import THESIS_ROWS
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
@@ -27,14 +28,6 @@ from workcell.modeller.model import LEVELS
 
 UNIT_SQUARE = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
 D90 = math.pi / 2
-THESIS_ROWS = [
-    spatial.srt(rotation=(D90, 0, 0)),
-    spatial.srt(rotation=(D90, 0, 0), translation=(0, 1, 0)),
-    spatial.srt(rotation=(0, -D90, 0)),
-    spatial.srt(rotation=(0, -D90, 0), translation=(1, 0, 0)),
-    spatial.srt(),
-    spatial.srt(translation=(0, 0, 1)),
-]
 
 
 def _awkward_model() -> Model:

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import shapely
 import trimesh
+from helpers import check_solid, snapshot
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -36,25 +37,6 @@ def _rel(a, b):
     return abs(a - b) / max(abs(b), 1e-300)
 
 
-def _snapshot(model):
-    out = {}
-    for level, names in model.list().items():
-        for nm in names:
-            info = model.info((level, nm))
-            out[(level, nm)] = (info.pointed_by, info.n_relations)
-    return out
-
-
-def _check_solid(model, name):
-    mesh = model.world_mesh(name)
-    assert mesh.is_watertight
-    assert mesh.is_winding_consistent
-    assert mesh.volume > 0
-    report = model.validity(name)
-    assert report.ok, report.problems
-    return mesh
-
-
 def _revolve_volume(profile, n, angle=2 * np.pi, holes=()):
     """Exact volume of the n-step revolve: n sin(angle/n) times the profile's first moment
     about the axis (shapely computes area and centroid)."""
@@ -76,7 +58,7 @@ def test_extrude_with_holes_volume_patches_genus():
     assert s.area == pytest.approx(AREA_WITH_HOLES, rel=RTOL)
     h = 0.7
     assert solids.extrude(m, "ex", s, height=h) == "ex"
-    mesh = _check_solid(m, "ex")
+    mesh = check_solid(m, "ex")
     p = m.properties("ex")
     assert _rel(p.volume, AREA_WITH_HOLES * h) < RTOL
     # thesis rule: m + n side patches (4 main edges, 4 + 3 hole edges) plus 2 caps
@@ -103,7 +85,7 @@ def test_extrude_oblique_and_downward_cavalieri(d):
     m = workcell.Model()
     s = Surface(MAIN, HOLES)
     solids.extrude(m, "ex", s, direction=d)
-    mesh = _check_solid(m, "ex")
+    mesh = check_solid(m, "ex")
     p = m.properties("ex")
     assert _rel(p.volume, AREA_WITH_HOLES * abs(d[2])) < RTOL
     assert mesh.euler_number == 2 - 2 * len(HOLES)
@@ -144,10 +126,10 @@ def test_extrude_downward_is_mirror_of_upward():
 def test_extrude_bad_direction_raises_and_changes_nothing(kwargs):
     m = workcell.Model()
     m.create("surface", "prof", Surface(MAIN, HOLES))
-    before = _snapshot(m)
+    before = snapshot(m)
     with pytest.raises(GeometryError):
         solids.extrude(m, "ex", "prof", **kwargs)
-    assert _snapshot(m) == before
+    assert snapshot(m) == before
     assert not m.exists("ex")
 
 
@@ -216,7 +198,7 @@ PROFILE = np.array([(1.0, 0.0), (2.0, 0.0), (2.0, 1.0), (1.5, 1.5), (1.0, 1.0)])
 def test_revolve_full_exact_and_vs_trimesh(n):
     m = workcell.Model()
     assert solids.revolve(m, "r", PROFILE, n=n) == "r"
-    mesh = _check_solid(m, "r")
+    mesh = check_solid(m, "r")
     p = m.properties("r")
     assert _rel(p.volume, _revolve_volume(PROFILE, n)) < RTOL
     ref = trimesh.creation.revolve(_closed(PROFILE), sections=n)
@@ -231,7 +213,7 @@ def test_revolve_full_exact_and_vs_trimesh(n):
 def test_revolve_partial_capped(angle, n):
     m = workcell.Model()
     solids.revolve(m, "r", PROFILE, n=n, angle=angle)
-    mesh = _check_solid(m, "r")
+    mesh = check_solid(m, "r")
     assert mesh.euler_number == 2
     p = m.properties("r")
     assert _rel(p.volume, _revolve_volume(PROFILE, n, angle)) < RTOL
@@ -266,7 +248,7 @@ def test_revolve_profile_touching_axis(angle):
     n = 10
     m = workcell.Model()
     solids.revolve(m, "r", prof, n=n, angle=angle)
-    mesh = _check_solid(m, "r")
+    mesh = check_solid(m, "r")
     assert mesh.euler_number == 2
     p = m.properties("r")
     assert _rel(p.volume, _revolve_volume(prof, n, angle)) < RTOL
@@ -284,7 +266,7 @@ def test_revolve_profile_with_hole():
     n = 12
     m = workcell.Model()
     solids.revolve(m, "r", Surface(outer, [hole]), n=n)
-    mesh = _check_solid(m, "r")
+    mesh = check_solid(m, "r")
     assert mesh.euler_number == 0  # two nested tori, each of Euler characteristic 0
     assert mesh.body_count == 2
     assert _rel(m.properties("r").volume, _revolve_volume(outer, n, holes=[hole])) < RTOL
@@ -308,10 +290,10 @@ def test_revolve_profile_with_hole():
 def test_revolve_bad_inputs_raise_and_change_nothing(profile, kwargs):
     m = workcell.Model()
     solids.cube(m, "c", size=1.0)
-    before = _snapshot(m)
+    before = snapshot(m)
     with pytest.raises(GeometryError):
         solids.revolve(m, "r", profile, **kwargs)
-    assert _snapshot(m) == before
+    assert snapshot(m) == before
     assert not m.exists("r")
 
 
@@ -348,7 +330,7 @@ def test_sweep_straight_equals_extrude():
     m = workcell.Model()
     solids.extrude(m, "ex", s, height=1.3)
     assert solids.sweep(m, "sw", s, [(0, 0, 0), (0, 0, 1.3)]) == "sw"
-    _check_solid(m, "sw")
+    check_solid(m, "sw")
     pe, ps = m.properties("ex"), m.properties("sw")
     assert _rel(ps.volume, AREA_WITH_HOLES * 1.3) < RTOL
     assert _rel(ps.volume, pe.volume) < RTOL
@@ -399,7 +381,7 @@ def test_sweep_quarter_circle_exact_with_tangents():
         P, D = _arc(R, N)
         m = workcell.Model()
         solids.sweep(m, "sw", Surface.rectangle(w, d, center=True), P, directions=D, up=(0, 1, 0))
-        _check_solid(m, "sw")
+        check_solid(m, "sw")
         assert _rel(m.properties("sw").volume, N * np.sin(np.pi / (2 * N)) * w * d * R) < RTOL
 
 
@@ -414,7 +396,7 @@ def test_sweep_holed_asymmetric_profile_along_arc_exact():
         P, D = _arc(R, N)
         m = workcell.Model()
         solids.sweep(m, "sw", Surface(main, [hole]), P, directions=D, up=(0, 1, 0))
-        mesh = _check_solid(m, "sw")
+        mesh = check_solid(m, "sw")
         assert mesh.euler_number == 0  # one hole through the swept bar: genus 1
         expected = N * np.sin(np.pi / (2 * N)) * poly.area * (R - poly.centroid.y)
         assert _rel(m.properties("sw").volume, expected) < RTOL
@@ -424,7 +406,7 @@ def test_revolve_profile_orientation_does_not_matter():
     m = workcell.Model()
     solids.revolve(m, "ccw", PROFILE, n=7, angle=2.0)
     solids.revolve(m, "cw", PROFILE[::-1], n=7, angle=2.0)
-    _check_solid(m, "cw")
+    check_solid(m, "cw")
     assert _rel(m.properties("cw").volume, m.properties("ccw").volume) < RTOL
     assert _rel(m.properties("cw").volume, _revolve_volume(PROFILE, 7, 2.0)) < RTOL
 
@@ -460,12 +442,12 @@ def test_sweep_linear_taper_is_frustum(k):
     scales = np.linspace(s0, s1, k)
     m = workcell.Model()
     solids.sweep(m, "fr", Surface.rectangle(1.0, 1.0, center=True), path, scales=scales)
-    _check_solid(m, "fr")
+    check_solid(m, "fr")
     a1, a2 = s0**2, s1**2
     assert _rel(m.properties("fr").volume, h / 3 * (a1 + a2 + np.sqrt(a1 * a2))) < RTOL
     # a corner-anchored square scales about its corner: an oblique frustum, same volume
     solids.sweep(m, "fr2", Surface.rectangle(1.0, 1.0), path, scales=scales)
-    _check_solid(m, "fr2")
+    check_solid(m, "fr2")
     assert _rel(m.properties("fr2").volume, h / 3 * (a1 + a2 + np.sqrt(a1 * a2))) < RTOL
 
 
@@ -521,10 +503,10 @@ def test_sweep_of_existing_surface_shares_it():
 def test_sweep_bad_inputs_raise_and_change_nothing(path, kwargs):
     m = workcell.Model()
     solids.cube(m, "c", size=1.0)
-    before = _snapshot(m)
+    before = snapshot(m)
     with pytest.raises(GeometryError):
         solids.sweep(m, "sw", Surface.rectangle(1.0, 1.0), path, **kwargs)
-    assert _snapshot(m) == before
+    assert snapshot(m) == before
     assert not m.exists("sw")
 
 
