@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import trimesh
 
 from workcell import spatial
 
@@ -45,3 +46,18 @@ def check_solid(model, name):
     report = model.validity(name)
     assert report.ok, report.problems
     return mesh
+
+
+def assembled_as_placed(model, block):
+    """The block's boundary built here, independently of the world mesher: every related
+    surface triangulated, placed by its transform (winding reversed under a reflection, so
+    the front side stays the front side) and welded by trimesh. No face is re-oriented."""
+    vs, fs, base = [], [], 0
+    for rel in model.relations(block):
+        V2, F = model.surface(rel.target).triangulate()
+        V = np.column_stack([V2, np.zeros(len(V2))]) @ rel.transform[:3, :3].T
+        F = np.asarray(F)[:, ::-1] if np.linalg.det(rel.transform[:3, :3]) < 0 else F
+        vs.append(V + rel.transform[:3, 3])
+        fs.append(np.asarray(F) + base)
+        base += len(V2)
+    return trimesh.Trimesh(np.vstack(vs), np.vstack(fs), process=True)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from helpers import check_solid, ngon_area, snapshot
+from helpers import assembled_as_placed, check_solid, ngon_area, snapshot
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
@@ -399,21 +399,6 @@ def test_every_solid_placed_by_a_rigid_transform_keeps_its_properties():
         _check_mass_properties(m, obj)
 
 
-def _assembled_as_placed(model, block):
-    """The block's boundary built here, independently of the world mesher: every related
-    surface triangulated, placed by its transform (winding reversed under a reflection, so
-    the front side stays the front side) and welded by trimesh. No face is re-oriented."""
-    vs, fs, base = [], [], 0
-    for rel in model.relations(block):
-        V2, F = model.surface(rel.target).triangulate()
-        V = np.column_stack([V2, np.zeros(len(V2))]) @ rel.transform[:3, :3].T
-        F = np.asarray(F)[:, ::-1] if np.linalg.det(rel.transform[:3, :3]) < 0 else F
-        vs.append(V + rel.transform[:3, 3])
-        fs.append(np.asarray(F) + base)
-        base += len(V2)
-    return trimesh.Trimesh(np.vstack(vs), np.vstack(fs), process=True)
-
-
 def _front_normal(T):
     """Direction of a placed surface's front (local +z): normals map by the inverse transpose."""
     n = np.linalg.inv(T[:3, :3]).T @ [0.0, 0.0, 1.0]
@@ -423,7 +408,7 @@ def _front_normal(T):
 def test_every_solid_places_its_surfaces_front_side_out():
     m = workcell.Model()
     for name in _build_all(m):
-        mesh = _assembled_as_placed(m, name)
+        mesh = assembled_as_placed(m, name)
         assert mesh.is_watertight, name
         assert mesh.is_winding_consistent, name
         assert mesh.volume > 0, name

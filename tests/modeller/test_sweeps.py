@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import shapely
 import trimesh
-from helpers import check_solid, snapshot
+from helpers import assembled_as_placed, check_solid, snapshot
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -510,21 +510,6 @@ def test_sweep_bad_inputs_raise_and_change_nothing(path, kwargs):
     assert not m.exists("sw")
 
 
-def _assembled_as_placed(model, block):
-    """The block's boundary built here, independently of the world mesher: every related
-    surface triangulated, placed by its transform (winding reversed under a reflection, so
-    the front side stays the front side) and welded by trimesh. No face is re-oriented."""
-    vs, fs, base = [], [], 0
-    for rel in model.relations(block):
-        V2, F = model.surface(rel.target).triangulate()
-        V = np.column_stack([V2, np.zeros(len(V2))]) @ rel.transform[:3, :3].T
-        F = np.asarray(F)[:, ::-1] if np.linalg.det(rel.transform[:3, :3]) < 0 else F
-        vs.append(V + rel.transform[:3, 3])
-        fs.append(np.asarray(F) + base)
-        base += len(V2)
-    return trimesh.Trimesh(np.vstack(vs), np.vstack(fs), process=True)
-
-
 def test_every_sweep_places_its_surfaces_front_side_out():
     m = workcell.Model()
     s = Surface(MAIN, HOLES)
@@ -538,7 +523,7 @@ def test_every_sweep_places_its_surfaces_front_side_out():
     path = np.column_stack([np.zeros(3), np.zeros(3), np.linspace(0, 2, 3)])
     solids.sweep(m, "taper", Surface.rectangle(1, 1), path, scales=[1.0, 0.7, 0.4])
     for name in ("up", "down", "full", "part", "axis", "arc", "taper"):
-        mesh = _assembled_as_placed(m, name)
+        mesh = assembled_as_placed(m, name)
         assert mesh.is_watertight, name
         assert mesh.is_winding_consistent, name
         assert mesh.volume > 0, name
