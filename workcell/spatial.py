@@ -14,6 +14,8 @@ and :func:`srt` use exact 0/+-1 entries, so e.g. the unit cube's faces land exac
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
@@ -22,8 +24,10 @@ from workcell.errors import GeometryError
 
 __all__ = [
     "as_transform",
+    "as_transforms",
     "axis_angle",
     "compose",
+    "det3",
     "euler",
     "frame_from_points",
     "from_point_pairs",
@@ -232,35 +236,73 @@ def from_point_pairs(start: ArrayLike, end: ArrayLike) -> Array:
     return frame_from_points(*Q) @ invert(frame_from_points(*P))
 
 
-def as_transform(matrix: ArrayLike, *, rigid: bool = False, name: str = "transform") -> Array:
-    """Validate a raw 4x4 (or 3x4) matrix and return a float64 copy.
+def det3(T: ArrayLike) -> Array:
+    """Determinants of the upper 3x3 blocks of an (N, 4, 4) or (N, 3, 3) stack, as a . (b x c).
 
-    Checks: finite, last row ``(0, 0, 0, 1)``, non-singular upper 3x3 (``|det| > 1e-12``);
-    with ``rigid=True`` also orthonormal with ``det = +1`` within 1e-9.
+    Cheaper than ``np.linalg.det`` on small stacks, which is called once per block here.
+    """
+    A = np.asarray(T, dtype=np.float64)
+    a, b, c = A[:, :3, 0], A[:, :3, 1], A[:, :3, 2]
+    return (
+        a[:, 0] * (b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1])
+        - a[:, 1] * (b[:, 0] * c[:, 2] - b[:, 2] * c[:, 0])
+        + a[:, 2] * (b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0])
+    )
+
+
+def as_transforms(transforms: ArrayLike, *, rigid: bool = False, what: str = "transform") -> Array:
+    """Validate one 4x4 (or 3x4) matrix or an (N, 4, 4) stack; return a float64 copy.
+
+    Checks: finite, last row ``(0, 0, 0, 1)`` within 1e-12, non-singular upper 3x3
+    (``|det| > 1e-12``); with ``rigid=True`` also orthonormal with ``det = +1`` within 1e-9.
+    Raises GeometryError starting with ``what`` (and, for a stack, the index of the first
+    bad matrix) and giving the reason. The returned last rows are exactly (0, 0, 0, 1).
+    """
+    try:
+        A = np.array(transforms, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise GeometryError(f"{what} is not a numeric 4x4 matrix") from exc
+    single = A.ndim == 2
+    if single and A.shape == (3, 4):
+        A = np.vstack([A, _LAST_ROW])
+    if single:
+        A = A[None]
+    if A.ndim != 3 or A.shape[1:] != (4, 4):
+        raise GeometryError(f"{what} must be 4x4 or 3x4, got shape {np.shape(transforms)}")
+
+    def fail(bad: NDArray[np.bool_], reason: str | Callable[[int], str]) -> None:
+        i = int(np.argmax(bad))
+        at = "" if single else f" (matrix {i})"
+        raise GeometryError(f"{what}{at} {reason(i) if callable(reason) else reason}")
+
+    finite = np.isfinite(A).all(axis=(1, 2))
+    if not finite.all():
+        fail(~finite, "is not affine: it has non-finite entries (NaN or inf)")
+    off = np.abs(A[:, 3] - _LAST_ROW).max(axis=1) > 1e-12
+    if off.any():
+        fail(off, lambda i: f"is not affine: its last row must be (0, 0, 0, 1), got {A[i, 3]}")
+    A[:, 3] = _LAST_ROW
+    det = det3(A)
+    if (np.abs(det) <= 1e-12).any():
+        fail(np.abs(det) <= 1e-12, lambda i: f"is singular: det of its 3x3 part is {det[i]:.3g}")
+    if rigid:
+        R = A[:, :3, :3]
+        dev = np.abs(np.matmul(R.transpose(0, 2, 1), R) - np.eye(3)).max(axis=(1, 2))
+        if (dev > 1e-9).any():
+            fail(dev > 1e-9, lambda i: f"is not rigid: R^T R differs from I by {dev[i]:.1e}")
+        if (np.abs(det - 1.0) > 1e-9).any():
+            fail(np.abs(det - 1.0) > 1e-9, lambda i: f"is not rigid: det(R) = {det[i]:.6g}, not +1")
+    return A[0] if single else A
+
+
+def as_transform(matrix: ArrayLike, *, rigid: bool = False, name: str = "transform") -> Array:
+    """Validate a raw 4x4 (or 3x4) matrix and return a float64 copy (see :func:`as_transforms`).
+
     Raises GeometryError naming ``name`` and the reason.
     """
-    M = np.array(matrix, dtype=np.float64)
-    if M.shape == (3, 4):
-        M = np.vstack([M, _LAST_ROW])
-    if M.shape != (4, 4):
+    M = as_transforms(matrix, rigid=rigid, what=f"transform {name!r}")
+    if M.ndim != 2:
         raise GeometryError(f"transform {name!r} must be 4x4 or 3x4, got shape {M.shape}")
-    if not np.all(np.isfinite(M)):
-        raise GeometryError(f"transform {name!r} has non-finite entries (NaN or inf)")
-    if np.abs(M[3] - _LAST_ROW).max() > 1e-12:
-        raise GeometryError(f"transform {name!r} last row must be (0, 0, 0, 1), got {M[3]}")
-    M[3] = _LAST_ROW
-    det = float(np.linalg.det(M[:3, :3]))
-    if abs(det) <= 1e-12:
-        raise GeometryError(f"transform {name!r} is singular: det of its 3x3 part is {det:.3g}")
-    if rigid:
-        R = M[:3, :3]
-        dev = float(np.abs(R.T @ R - np.eye(3)).max())
-        if dev > 1e-9:
-            raise GeometryError(
-                f"transform {name!r} is not rigid: R^T R differs from I by {dev:.1e}"
-            )
-        if abs(det - 1.0) > 1e-9:
-            raise GeometryError(f"transform {name!r} is not rigid: det(R) = {det:.6g}, not +1")
     return M
 
 

@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from workcell.errors import GeometryError
 from workcell.modeller.model import Model
+from workcell.modeller.world import place_mesh
 
 __all__ = ["difference", "evaluate_boolean", "intersection", "union"]
 
@@ -38,8 +39,7 @@ def evaluate_boolean(
     """Evaluate ``op`` over operand meshes, each (vertices, faces) placed by a 4x4 transform."""
     ms = []
     for i, ((V, F), T) in enumerate(operands):
-        Vw = V @ T[:3, :3].T + T[:3, 3]
-        Fw = F[:, ::-1] if np.linalg.det(T[:3, :3]) < 0 else F
+        Vw, Fw = place_mesh(V, F, T)
         ms.append(_manifold(Vw, Fw, f"operand {i + 1} of boolean block '{name}'"))
     if op == "union":
         out = manifold3d.Manifold.batch_boolean(ms, manifold3d.OpType.Add)

@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import difflib
 import re
-from collections.abc import Iterable, Sequence
+from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -34,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from workcell.errors import GeometryError, ModelError
 from workcell.modeller.surface import Surface
+from workcell.spatial import as_transforms
 
 if TYPE_CHECKING:
     import trimesh
@@ -41,7 +43,7 @@ if TYPE_CHECKING:
     from workcell.modeller.meshprops import MassProperties, ValidityReport
     from workcell.modeller.world import WorldPart
 
-__all__ = ["BOOLEAN_OPS", "LEVELS", "EntityInfo", "Model", "Ref", "Relation", "det3"]
+__all__ = ["BOOLEAN_OPS", "LEVELS", "EntityInfo", "Model", "Ref", "Relation"]
 
 LEVELS = ("surface", "block", "object", "scene")
 CHILD = {"block": "surface", "object": "block", "scene": "object"}
@@ -159,55 +161,6 @@ class _Entity:
     @property
     def label(self) -> str:
         return f"{self.level} '{self.name}'"
-
-
-def det3(T: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Determinants of the upper 3x3 blocks of a (N, 4, 4) or (N, 3, 3) stack (a . (b x c))."""
-    a, b, c = T[:, :3, 0], T[:, :3, 1], T[:, :3, 2]
-    return (
-        a[:, 0] * (b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1])
-        - a[:, 1] * (b[:, 0] * c[:, 2] - b[:, 2] * c[:, 0])
-        + a[:, 2] * (b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0])
-    )
-
-
-def check_transforms(Ts: ArrayLike, *, rigid: bool, what: str) -> NDArray[np.float64]:
-    """Validate a (4, 4) or (N, 4, 4) stack of affine transforms and return it as float64.
-
-    Raises :class:`GeometryError` naming ``what`` and the first bad index when a matrix is
-    not finite, its last row is not (0, 0, 0, 1), it is singular, or (``rigid``) it is not
-    a proper rotation plus translation within 1e-9.
-    """
-    try:
-        A = np.array(Ts, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise GeometryError(f"{what}: not a numeric 4x4 matrix") from exc
-    single = A.ndim == 2
-    if single:
-        A = A[None]
-    if A.ndim != 3 or A.shape[1:] != (4, 4):
-        raise GeometryError(f"{what}: expected 4x4 matrices, got shape {np.shape(Ts)}")
-    bad = ~np.isfinite(A).all(axis=(1, 2))
-    bad |= np.abs(A[:, 3] - [0, 0, 0, 1]).max(axis=1) > 1e-12
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise GeometryError(
-            f"{what}: matrix {i} is not affine (non-finite or last row not 0 0 0 1)"
-        )
-    det = det3(A)
-    if (np.abs(det) < 1e-12).any():
-        i = int(np.argmax(np.abs(det) < 1e-12))
-        raise GeometryError(f"{what}: matrix {i} is singular (det = {det[i]:.3g})")
-    if rigid:
-        R = A[:, :3, :3]
-        err = np.abs(np.einsum("nji,njk->nik", R, R) - np.eye(3)).max(axis=(1, 2))
-        if (err > 1e-9).any() or (det < 0).any():
-            i = int(np.argmax((err > 1e-9) | (det < 0)))
-            raise GeometryError(
-                f"{what}: matrix {i} is not rigid (R^T R - I up to {err[i]:.2g}, det {det[i]:.6g}); "
-                "placements of objects in a scene must be rotations plus translations"
-            )
-    return A[0] if single else A
 
 
 def check_name(name: object) -> str:
@@ -394,7 +347,7 @@ class Model:
             transforms = [None] * len(ents)
         if len(transforms) != len(ents):
             raise ModelError(f"{len(ents)} operands but {len(transforms)} transforms")
-        Ts = check_transforms(
+        Ts = as_transforms(
             [np.eye(4) if T is None else T for T in transforms], rigid=False, what=f"block '{name}'"
         )
         check_name(name)
@@ -480,7 +433,7 @@ class Model:
                 f"{o.label} cannot own relations; owners are blocks, objects and scenes"
             )
         # validate the transforms first: their count (one (4, 4) or a stack) sets n
-        Ts = check_transforms(
+        Ts = as_transforms(
             transforms, rigid=(o.level == "scene"), what=f"{RELATION_KIND[o.level]} of {o.label}"
         )
         if Ts.ndim == 2:
@@ -535,12 +488,7 @@ class Model:
         self, o: _Entity, names: list[str], targets: list[_Entity], Ts: NDArray[np.float64]
     ) -> None:
         o.rels.add(names, targets, Ts)
-        counts = (
-            {targets[0]: len(targets)}
-            if targets and targets.count(targets[0]) == len(targets)
-            else _count(targets)
-        )
-        for t, k in counts.items():
+        for t, k in Counter(targets).items():
             t.users[o] = t.users.get(o, 0) + k
         self._touch(o)
 
@@ -584,9 +532,7 @@ class Model:
         """Replace the transform of one relation."""
         o = self._get(owner)
         i = self._rel_index(o, relation_name)
-        T = check_transforms(
-            transform, rigid=(o.level == "scene"), what=f"relation '{relation_name}'"
-        )
+        T = as_transforms(transform, rigid=(o.level == "scene"), what=f"relation '{relation_name}'")
         if T.shape != (4, 4):
             raise GeometryError(
                 f"relation '{relation_name}': expected one 4x4 matrix, got {T.shape}"
@@ -631,7 +577,7 @@ class Model:
         T = (
             None
             if transform is None
-            else check_transforms(
+            else as_transforms(
                 transform, rigid=(e.level == "scene"), what=f"copy transform for '{new_name}'"
             )
         )
@@ -652,7 +598,7 @@ class Model:
             return new_name
         Ts = e.rels.T.copy() if T is None else T @ e.rels.T
         if e.level == "scene":
-            check_transforms(Ts, rigid=True, what=f"copy of {e.label}")
+            as_transforms(Ts, rigid=True, what=f"copy of {e.label}")
         c = self._levels[e.level]
         new = _Entity(e.level, new_name)
         new.colour, new.movable, new.boolean, new.serial = e.colour, e.movable, e.boolean, e.serial
@@ -773,12 +719,5 @@ class Model:
         return f"Model({counts})"
 
 
-def _count(items: Iterable[_Entity]) -> dict[_Entity, int]:
-    out: dict[_Entity, int] = {}
-    for t in items:
-        out[t] = out.get(t, 0) + 1
-    return out
-
-
-def _target_counts(e: _Entity) -> dict[_Entity, int]:
-    return _count(e.rels.targets)
+def _target_counts(e: _Entity) -> Counter[_Entity]:
+    return Counter(e.rels.targets)

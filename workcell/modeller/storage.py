@@ -24,15 +24,13 @@ import json
 import os
 import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from workcell.errors import GeometryError, ModelError
+from workcell.modeller.model import BOOLEAN_OPS, CHILD, LEVELS, Model
 from workcell.modeller.surface import Surface
-
-if TYPE_CHECKING:
-    from workcell.modeller.model import Model
 
 __all__ = [
     "FORMAT",
@@ -88,8 +86,6 @@ def _field(d: Any, key: str, where: str, kinds: type | tuple[type, ...]) -> Any:
 
 def model_from_dict(data: Any) -> Model:
     """Build a new model from :func:`model_to_dict` data, validating every part first."""
-    from workcell.modeller.model import LEVELS, Model
-
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise ModelError(f"not a {FORMAT} document (missing or wrong 'format')")
     if type(data.get("version")) is not int or data.get("version") != VERSION:
@@ -121,8 +117,6 @@ def model_from_dict(data: Any) -> Model:
                     )
                     op = d.get("boolean")
                     if op is not None:
-                        from workcell.modeller.model import BOOLEAN_OPS
-
                         if level != "block" or op not in BOOLEAN_OPS:
                             raise ModelError(f"invalid boolean {op!r}")
                         m._levels[level][name].boolean = op
@@ -142,7 +136,7 @@ def model_from_dict(data: Any) -> Model:
                 for j, r in enumerate(rels):
                     rw = f"{where} relation {j}"
                     names.append(_field(r, "name", rw, str))
-                    tl = "block" if e.boolean else _child(level)
+                    tl = "block" if e.boolean else CHILD[level]
                     targets.append((tl, _field(r, "target", rw, str)))
                     Ts.append(_field(r, "transform", rw, list))
                 try:
@@ -155,12 +149,6 @@ def model_from_dict(data: Any) -> Model:
             e.serial = serial
             e.rels.custom = True
     return m
-
-
-def _child(level: str) -> str:
-    from workcell.modeller.model import CHILD
-
-    return CHILD[level]
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:

@@ -75,15 +75,18 @@ def _strictly_convex(p: NDArray[np.float64]) -> bool:
     return abs(heading[-1] - heading[0]) < 2 * np.pi  # total turning of exactly one loop
 
 
-def _check_simple(p: NDArray[np.float64], label: str, surface: str) -> None:
+def _check_simple(p: NDArray[np.float64], label: str, surface: str) -> bool:
+    """Refuse a zero-area or self-intersecting contour; return whether it is strictly convex."""
     if abs(_signed_area(p)) <= _EPS * max(1.0, float(np.ptp(p, axis=0).max()) ** 2):
         # zero signed area: collinear (or tiny) points, or lobes that cancel (a bow-tie)
         sv = np.linalg.svd(p - p.mean(axis=0), compute_uv=False)
         if sv[-1] <= 1e-9 * sv[0] or LinearRing(p).is_simple:
             raise GeometryError(f"surface '{surface}': {label} has zero area")
-    if not _strictly_convex(p) and not LinearRing(p).is_simple:
+    convex = _strictly_convex(p)
+    if not convex and not LinearRing(p).is_simple:
         reason = shapely.is_valid_reason(Polygon(p))
         raise GeometryError(f"surface '{surface}': {label} is not simple ({reason})")
+    return convex
 
 
 @dataclass(frozen=True, eq=False)
@@ -103,7 +106,7 @@ class Surface:
         self, main: ArrayLike, holes: Sequence[ArrayLike] = (), *, name: str = "surface"
     ) -> None:
         m = _clean_contour(main, "main contour", name)
-        _check_simple(m, "main contour", name)
+        convex = _check_simple(m, "main contour", name)
         if _signed_area(m) < 0:
             m = m[::-1].copy()
         hs = []
@@ -121,7 +124,7 @@ class Surface:
         object.__setattr__(self, "holes", tuple(hs))
         object.__setattr__(self, "name", name)
         object.__setattr__(self, "_tri", None)
-        object.__setattr__(self, "_convex", not hs and _strictly_convex(m))
+        object.__setattr__(self, "_convex", convex and not hs)
 
     # ---------------------------------------------------------------- constructors
     @classmethod

@@ -21,12 +21,12 @@ from scipy.spatial import cKDTree
 
 from workcell.errors import GeometryError
 from workcell.modeller.meshprops import MassProperties, mass_properties, orient_consistently
-from workcell.modeller.model import det3
+from workcell.spatial import det3
 
 if TYPE_CHECKING:
     from workcell.modeller.model import _Entity
 
-__all__ = ["WorldPart", "merge_vertices"]
+__all__ = ["WorldPart", "merge_vertices", "place_mesh"]
 
 DEFAULT_COLOUR = (0.7, 0.7, 0.72, 1.0)
 _MERGE_REL = 1e-9  # vertices closer than this fraction of the mesh size are one vertex
@@ -129,25 +129,28 @@ def _place(
     return Vw.reshape(-1, 3), Fw.reshape(-1, 3)
 
 
+def place_mesh(
+    V: NDArray[np.float64], F: NDArray[np.int64], T: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """One mesh (V, F) placed by a 4x4 transform T; faces turned over under a reflection."""
+    return _place(V, F, T[None])
+
+
 def _group(
     targets: list, Ts: NDArray[np.float64]
 ) -> list[tuple[object, NDArray[np.float64], NDArray[np.int64]]]:
-    """Group relation transforms by target: (target, transforms, relation indices), first-seen order."""
-    first: dict[int, int] = {}
+    """Group relations by target: (target, transforms, relation indices), in first-seen order."""
     if not targets:
         return []
     ids = np.fromiter(map(id, targets), dtype=np.int64, count=len(targets))
-    cut = np.flatnonzero(ids[1:] != ids[:-1]) + 1  # contiguous runs of one target, the usual case
-    runs = list(zip([0, *cut.tolist()], [*cut.tolist(), len(targets)], strict=True))
-    for k, (a, _) in enumerate(runs):
-        first.setdefault(id(targets[a]), k)
+    _, first, inv = np.unique(ids, return_index=True, return_inverse=True)
+    order = np.argsort(inv, kind="stable")
+    ends = np.cumsum(np.bincount(inv))
+    starts = ends - np.bincount(inv)
     out = []
-    for k, (a, _b) in enumerate(runs):
-        if first[id(targets[a])] != k:
-            continue
-        same = [r for r in runs if targets[r[0]] is targets[a]]
-        idx = np.concatenate([np.arange(r0, r1) for r0, r1 in same])
-        out.append((targets[a], Ts[idx], idx))
+    for k in np.argsort(first):
+        idx = order[starts[k] : ends[k]]
+        out.append((targets[first[k]], Ts[idx], idx))
     return out
 
 
@@ -266,9 +269,7 @@ def entity_parts(e: _Entity) -> list[WorldPart]:
     if hit is None:
         hit = []
         for path, b, o, T in _placed_blocks(e):
-            V, F = _block_arrays(b)
-            Vw = V @ T[:3, :3].T + T[:3, 3]
-            Fw = F[:, ::-1] if np.linalg.det(T[:3, :3]) < 0 else F
+            Vw, Fw = place_mesh(*_block_arrays(b), T)
             colour = b.colour or (o.colour if o is not None else None) or e.colour or DEFAULT_COLOUR
             movable = b.movable or (o is not None and o.movable)
             mesh = trimesh.Trimesh(vertices=Vw, faces=Fw, process=False, validate=False)
