@@ -94,9 +94,11 @@ def merge_vertices(
         # pair the near-boundary points themselves: a cell's representative may lie up to
         # a cell diagonal away from the twin, beyond the query radius
         pairs = cKDTree(vertices[near]).query_pairs(cell, output_type="ndarray")
-        if len(pairs):
+        ga, gb = inv[near[pairs[:, 0]]], inv[near[pairs[:, 1]]]
+        split = ga != gb  # twins the rounding already put in one cell need nothing
+        if split.any():
             g = coo_matrix(
-                (np.ones(len(pairs)), (inv[near[pairs[:, 0]]], inv[near[pairs[:, 1]]])),
+                (np.ones(int(split.sum())), (ga[split], gb[split])),
                 shape=(len(first), len(first)),
             )
             _, label = connected_components(g, directed=False)
