@@ -119,10 +119,11 @@ def _place(
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Copies of (V, F) under each transform of Ts (N, 4, 4); winding kept outward under reflection.
 
-    ``flip`` (N,) marks the orientation-reversing transforms when the caller knows them.
+    ``V`` is one vertex set (P, 3) shared by every copy, or one per copy (N, P, 3) with the
+    same faces. ``flip`` (N,) marks the orientation-reversing transforms when known.
     """
     Vw = np.matmul(V, Ts[:, :3, :3].transpose(0, 2, 1)) + Ts[:, None, :3, 3]
-    offs = (np.arange(len(Ts)) * len(V))[:, None, None]
+    offs = (np.arange(len(Ts)) * V.shape[-2])[:, None, None]
     Fw = F + offs
     if flip is None:
         flip = det3(Ts) < 0
@@ -188,9 +189,20 @@ def _block_arrays(e: _Entity) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         Vs, Fs, rel_of_face = [], [], []
         base = 0
         flips = det3(e.rels.T) < 0
+        # surfaces with the same triangulation (e.g. all quads) are placed in one batch
+        shapes: dict[tuple[int, bytes], list] = {}
         for t, Ts, idx in _group(e.rels.targets, e.rels.T):
             SV, SF = _surface_arrays(t)
-            Vw, Fw = _place(SV, SF, Ts, flips[idx])
+            shapes.setdefault((len(SV), SF.tobytes()), []).append((SV, SF, Ts, idx))
+        for members in shapes.values():
+            SF = members[0][1]
+            idx = np.concatenate([m[3] for m in members])
+            if len(members) == 1:
+                SV = members[0][0]
+            else:
+                which = np.repeat(np.arange(len(members)), [len(m[3]) for m in members])
+                SV = np.stack([m[0] for m in members])[which]
+            Vw, Fw = _place(SV, SF, e.rels.T[idx], flips[idx])
             Vs.append(Vw)
             Fs.append(Fw + base)
             rel_of_face.append(np.repeat(idx, len(SF)))
