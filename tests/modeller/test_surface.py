@@ -517,3 +517,10 @@ def test_convex_fast_path_refuses_polygons_winding_several_times(k, winds, r, re
     assert not _strictly_convex(p)
     with pytest.raises(GeometryError, match="not simple"):
         Surface(p)
+
+
+def test_convex_fast_path_refuses_a_spike():
+    # found by hypothesis: all turns have one sign, but one of them doubles back (~pi)
+    spike = np.array([(0.0, 0.0), (0.0, -1.0), (-4.77e-37, 0.0), (1.0, 0.0), (-1.0, -1.0)])
+    assert not LinearRing(spike).is_simple
+    assert not _strictly_convex(spike)

@@ -71,8 +71,9 @@ def _strictly_convex(p: NDArray[np.float64]) -> bool:
     turn = e[:, 0] * en[:, 1] - e[:, 1] * en[:, 0]
     if not ((turn > 0).all() or (turn < 0).all()):
         return False
-    heading = np.unwrap(np.arctan2(e[:, 1], e[:, 0]))
-    return abs(heading[-1] - heading[0]) < 2 * np.pi  # total turning of exactly one loop
+    angle = np.abs(np.arctan2(turn, e[:, 0] * en[:, 0] + e[:, 1] * en[:, 1]))
+    # no spike (a turn of ~pi doubles back) and the turns add up to one loop, not two
+    return bool(angle.max() < np.pi - 1e-9 and abs(angle.sum() - 2 * np.pi) < 1e-6)
 
 
 def _check_simple(p: NDArray[np.float64], label: str, surface: str) -> bool:
