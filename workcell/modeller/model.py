@@ -427,11 +427,7 @@ class Model:
 
         All-or-nothing: every name, target and transform is validated before anything changes.
         """
-        o = self._get(owner)
-        if o.level == "surface":
-            raise ModelError(
-                f"{o.label} cannot own relations; owners are blocks, objects and scenes"
-            )
+        o = self._owner(owner)
         # validate the transforms first: their count (one (4, 4) or a stack) sets n
         Ts = as_transforms(
             transforms, rigid=(o.level == "scene"), what=f"{RELATION_KIND[o.level]} of {o.label}"
@@ -439,34 +435,90 @@ class Model:
         if Ts.ndim == 2:
             Ts = Ts[None]
         n = len(Ts)
-        want = "block" if o.boolean else CHILD[o.level]
         if isinstance(target, (str, tuple)):
-            t = self._get(target, want) if isinstance(target, str) else self._get(target)
-            targets = [t] * n
-        else:
-            if len(target) != n:
-                raise ModelError(f"{len(target)} targets but {n} transforms")
-            cache: dict[Any, _Entity] = {}
-            targets = []
-            for r in target:
-                if not isinstance(r, str) and not (
-                    isinstance(r, tuple) and all(isinstance(x, str) for x in r)
-                ):
-                    raise ModelError(f"a reference is a name or (level, name), got {r!r}")
-                if r not in cache:
-                    cache[r] = self._get(r, want) if isinstance(r, str) else self._get(r)
-                targets.append(cache[r])
-        for t in set(targets):
-            if t.level != want:
-                raise ModelError(f"{o.label} points to {want}s; {t.label} is a {t.level}")
-            if t is o or o in self._made_of(t):
-                raise ModelError(f"attaching {t.label} to {o.label} would make a cycle")
+            return self._attach(o, [(self._target(o, target), n)], Ts, names)
+        if len(target) != n:
+            raise ModelError(f"{len(target)} targets but {n} transforms")
+        runs: list[tuple[_Entity, int]] = []
+        cache: dict[Any, _Entity] = {}
+        for r in target:
+            if r not in cache:
+                cache[r] = self._target(o, r)
+            t = cache[r]
+            if runs and runs[-1][0] is t:
+                runs[-1] = (t, runs[-1][1] + 1)
+            else:
+                runs.append((t, 1))
+        return self._attach(o, runs, Ts, names)
+
+    def attach_groups(
+        self,
+        owner: Ref,
+        groups: Sequence[tuple[Ref, ArrayLike]],
+        *,
+        names: Sequence[str] | None = None,
+    ) -> list[str]:
+        """Attach several targets at once: ``groups`` lists (target, transforms (k, 4, 4) or (4, 4)).
+
+        The same as one :meth:`attach_many` call per group, validated and applied as one
+        all-or-nothing operation (and much cheaper for many groups).
+        """
+        o = self._owner(owner)
+        runs, stacks = [], []
+        for target, transforms in groups:
+            try:
+                T = np.asarray(transforms, dtype=np.float64)
+                stacks.append(T.reshape(-1, 4, 4))
+            except (TypeError, ValueError, OverflowError) as exc:
+                raise GeometryError(
+                    f"{RELATION_KIND[o.level]} of {o.label}: transforms must be (k, 4, 4) or (4, 4), "
+                    f"got {np.shape(transforms)}"
+                ) from exc
+            runs.append((self._target(o, target), len(stacks[-1])))
+        Ts = as_transforms(
+            np.concatenate(stacks) if stacks else np.zeros((0, 4, 4)),
+            rigid=(o.level == "scene"),
+            what=f"{RELATION_KIND[o.level]} of {o.label}",
+        )
+        return self._attach(o, runs, Ts, names)
+
+    def _owner(self, ref: Ref) -> _Entity:
+        o = self._get(ref)
+        if o.level == "surface":
+            raise ModelError(
+                f"{o.label} cannot own relations; owners are blocks, objects and scenes"
+            )
+        return o
+
+    def _target(self, o: _Entity, ref: object) -> _Entity:
+        """Resolve a target reference for owner ``o`` and check its level and acyclicity."""
+        want = "block" if o.boolean else CHILD[o.level]
+        if not isinstance(ref, str) and not (
+            isinstance(ref, tuple) and all(isinstance(x, str) for x in ref)
+        ):
+            raise ModelError(f"a reference is a name or (level, name), got {ref!r}")
+        t = self._get(ref, want) if isinstance(ref, str) else self._get(ref)
+        if t.level != want:
+            raise ModelError(f"{o.label} points to {want}s; {t.label} is a {t.level}")
+        if t is o or o in self._made_of(t):
+            raise ModelError(f"attaching {t.label} to {o.label} would make a cycle")
+        return t
+
+    def _attach(
+        self,
+        o: _Entity,
+        runs: list[tuple[_Entity, int]],
+        Ts: NDArray[np.float64],
+        names: Sequence[str] | None,
+    ) -> list[str]:
+        """Name and add validated relations: ``runs`` of (target, count) in order, Ts (n, 4, 4)."""
+        n = len(Ts)
         if names is None:
-            start = o.serial
-            new_names = [f"{_PREFIX[o.level]}{start + i + 1}" for i in range(n)]
+            start, prefix = o.serial, _PREFIX[o.level]
+            new_names = list(map(f"{prefix}{{}}".format, range(start + 1, start + n + 1)))
             while o.rels.custom and any(o.rels.index(nm) is not None for nm in new_names):
                 start += n
-                new_names = [f"{_PREFIX[o.level]}{start + i + 1}" for i in range(n)]
+                new_names = list(map(f"{prefix}{{}}".format, range(start + 1, start + n + 1)))
             serial = start + n
         else:
             new_names = [check_name(nm) for nm in names]
@@ -480,6 +532,9 @@ class Model:
                     raise ModelError(f"{o.label} already has a relation named '{nm}'")
             serial = o.serial
             o.rels.custom = True
+        targets: list[_Entity] = []
+        for t, k in runs:
+            targets.extend([t] * k)
         self._add_relations(o, new_names, targets, Ts)
         o.serial = serial
         return new_names

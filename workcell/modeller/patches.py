@@ -156,9 +156,7 @@ def build_block(
             created.append(full)
         model.create("block", name, colour=colour)
         created.append(name)
-        for target, Ts in groups:
-            if len(Ts):
-                model.attach_many(("block", name), ("surface", target), Ts)
+        model.attach_groups(("block", name), [(("surface", t), Ts) for t, Ts in groups if len(Ts)])
     except Exception:
         for n in reversed(created):
             lvl = "block" if n == name else "surface"

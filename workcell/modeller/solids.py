@@ -130,9 +130,10 @@ def cylinder(
 
 
 def _sphere_parts(
-    name: str, m: int, n: int
+    name: str, m: int, n: int, radii: NDArray[np.float64]
 ) -> tuple[dict[str, Surface], list[tuple[str, NDArray[np.float64]]]]:
-    """Unit-sphere faces: n distinct faces per half slice, each placed m times, mirrored below."""
+    """Unit-sphere faces: n distinct faces per half slice, each placed m times, mirrored below;
+    every placement then scaled by ``radii`` (a, b, c) (m)."""
     alpha, beta = np.pi / (2 * n), 2 * np.pi / m
 
     def p(phi: float, lam: float) -> NDArray[np.float64]:
@@ -150,10 +151,14 @@ def _sphere_parts(
     )
     names = [f"{name}.band{j}" for j in range(n)]
     patches, F = planar_patches(corners, names)
+    # all placements at once: (n bands, 2 hemispheres, m slices, 4, 4); the lower hemisphere is
+    # the reflection z -> -z (row 2 negated), the scaling multiplies rows 0-2 by (a, b, c)
+    up = np.matmul(Rz[None], F[:, None])
+    both = np.stack([up, up * np.array([1.0, 1.0, -1.0, 1.0])[:, None]], axis=1)
+    both *= np.array([*radii, 1.0])[:, None]
     for j in range(n):
         surfaces[f"band{j}"] = patches[j]
-        up = Rz @ F[j]
-        relations.append((f"band{j}", np.concatenate([up, _FLIP @ up])))
+        relations.append((f"band{j}", both[j].reshape(-1, 4, 4)))
     return surfaces, relations
 
 
@@ -187,9 +192,7 @@ def ellipsoid(
     _positive(name, a=float(r[0]), b=float(r[1]), c=float(r[2]))
     m = _count(name, "m", m, 3)
     n = _count(name, "n", n, 1)
-    surfaces, relations = _sphere_parts(name, m, n)
-    S = spatial.scaling(*r)
-    relations = [(k, S @ Ts) for k, Ts in relations]
+    surfaces, relations = _sphere_parts(name, m, n, r)
     return build_block(model, name, surfaces, relations, colour=colour)
 
 
