@@ -1514,3 +1514,32 @@ TestModelMachine.settings = settings(
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow],
 )
+
+
+def test_attach_groups_equals_attach_many_calls_and_is_atomic():
+    from workcell import Model, Surface, spatial
+
+    def fresh():
+        m = Model()
+        m.create("surface", "a", Surface.rectangle(1, 1))
+        m.create("surface", "b", Surface.rectangle(2, 1))
+        m.create("block", "blk")
+        return m
+
+    Ta = np.stack([spatial.translation(i, 0, 0) for i in range(3)])
+    Tb = spatial.rot_x(0.5)
+    one, two = fresh(), fresh()
+    names = one.attach_groups("blk", [("a", Ta), ("b", Tb), ("a", Ta[:1])])
+    expected = two.attach_many("blk", "a", Ta) + two.attach_many("blk", "b", [Tb])
+    expected += two.attach_many("blk", "a", Ta[:1])
+    assert names == expected == ["ts1", "ts2", "ts3", "ts4", "ts5"]
+    assert one.to_dict() == two.to_dict()
+    assert one.pointed_by("a") == 4
+    assert one.pointed_by("b") == 1
+    before = one.to_dict()
+    singular = np.diag([1.0, 1.0, 0.0, 1.0])
+    for bad in ([("a", Ta), ("nope", Tb)], [("a", Ta), ("b", singular)], [("a", np.ones(5))]):
+        with pytest.raises(WorkcellError):
+            one.attach_groups("blk", bad)
+        assert one.to_dict() == before
+        assert one.pointed_by("a") == 4
