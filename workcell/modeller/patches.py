@@ -80,7 +80,7 @@ def planar_patches(
     uv = np.stack([np.einsum("knj,kj->kn", rel, x), np.einsum("knj,kj->kn", rel, y)], axis=2)
     T = np.zeros((len(p), 4, 4))
     T[:, :3, 0], T[:, :3, 1], T[:, :3, 2], T[:, :3, 3], T[:, 3, 3] = x, y, z, p[:, 0], 1.0
-    return [Surface(uv[k], name=names[k]) for k in range(len(p))], T
+    return Surface.convex_many(uv, names), T
 
 
 def planar_patch(points: ArrayLike, *, name: str = "patch") -> tuple[Surface, NDArray[np.float64]]:

@@ -64,16 +64,25 @@ def _clean_contour(points: ArrayLike, label: str, surface: str) -> NDArray[np.fl
     return p
 
 
+def _convex_mask(P: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """For a stack of contours (K, N, 2): which are strictly convex (so simple), either winding.
+
+    Every turn has the same sign, none doubles back (a turn of ~pi), and the turns add up
+    to one loop, not two (a pentagram's all-left turns add up to 4 pi).
+    """
+    e = np.roll(P, -1, axis=1) - P
+    en = np.roll(e, -1, axis=1)
+    turn = e[..., 0] * en[..., 1] - e[..., 1] * en[..., 0]
+    same = (turn > 0).all(axis=1) | (turn < 0).all(axis=1)
+    angle = np.abs(np.arctan2(turn, e[..., 0] * en[..., 0] + e[..., 1] * en[..., 1]))
+    return (
+        same & (angle.max(axis=1) < np.pi - 1e-9) & (np.abs(angle.sum(axis=1) - 2 * np.pi) < 1e-6)
+    )
+
+
 def _strictly_convex(p: NDArray[np.float64]) -> bool:
-    """True when every turn has the same sign and the contour winds once (so it is simple)."""
-    e = _next(p) - p
-    en = _next(e)
-    turn = e[:, 0] * en[:, 1] - e[:, 1] * en[:, 0]
-    if not ((turn > 0).all() or (turn < 0).all()):
-        return False
-    angle = np.abs(np.arctan2(turn, e[:, 0] * en[:, 0] + e[:, 1] * en[:, 1]))
-    # no spike (a turn of ~pi doubles back) and the turns add up to one loop, not two
-    return bool(angle.max() < np.pi - 1e-9 and abs(angle.sum() - 2 * np.pi) < 1e-6)
+    """True when the contour (N, 2) is strictly convex (see :func:`_convex_mask`)."""
+    return bool(_convex_mask(p[None])[0])
 
 
 def _check_simple(p: NDArray[np.float64], label: str, surface: str) -> bool:
@@ -168,6 +177,45 @@ class Surface:
     ) -> Surface:
         """Polygon from a point list (m), optionally with hole point lists."""
         return cls(points, holes, name=name)
+
+    @classmethod
+    def convex_many(cls, contours: ArrayLike, names: Sequence[str]) -> list[Surface]:
+        """Surfaces from a stack of contours (K, N, 2) (m), validated together.
+
+        Contours that are finite, free of repeated points and strictly convex are accepted in
+        one vectorised check; any other goes through the full constructor (which may
+        accept it, or raise GeometryError naming it).
+        """
+        P = np.asarray(contours, dtype=np.float64)
+        if P.ndim != 3 or P.shape[2] != 2 or P.shape[1] < 3 or len(names) != len(P):
+            raise GeometryError(
+                f"convex_many needs (K, N >= 3, 2) contours and K names, got {P.shape}"
+            )
+        step = np.abs(np.roll(P, -1, axis=1) - P).max(axis=2)
+        ok = np.isfinite(P).all(axis=(1, 2)) & (step > _EPS).all(axis=1) & _convex_mask(P)
+        area = 0.5 * (
+            P[..., 0] * np.roll(P[..., 1], -1, axis=1) - np.roll(P[..., 0], -1, axis=1) * P[..., 1]
+        ).sum(axis=1)
+        scale = np.maximum(1.0, np.ptp(P, axis=1).max(axis=1))
+        ok &= np.abs(area) > _EPS * scale**2
+        out = []
+        for k, name in enumerate(names):
+            if not ok[k]:
+                out.append(cls(P[k], name=name))
+                continue
+            m = (P[k] if area[k] > 0 else P[k][::-1]).copy()
+            m.flags.writeable = False
+            s = object.__new__(cls)
+            for key, value in (
+                ("main", m),
+                ("holes", ()),
+                ("name", name),
+                ("_tri", None),
+                ("_convex", True),
+            ):
+                object.__setattr__(s, key, value)
+            out.append(s)
+        return out
 
     # ---------------------------------------------------------------- properties
     @property
