@@ -524,3 +524,24 @@ def test_convex_fast_path_refuses_a_spike():
     spike = np.array([(0.0, 0.0), (0.0, -1.0), (-4.77e-37, 0.0), (1.0, 0.0), (-1.0, -1.0)])
     assert not LinearRing(spike).is_simple
     assert not _strictly_convex(spike)
+
+
+def test_convex_many_agrees_with_the_constructor():
+    from workcell import GeometryError, Surface
+
+    square = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    cw_quad = [(0, 0), (0, 2), (3, 2), (3, 0)]  # clockwise: normalised to counter-clockwise
+    l_shape = [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)]  # not convex: full constructor
+    pole = [(0, 0), (1, 0), (0.5, 1), (0.5, 1)]  # repeated point: full constructor drops it
+    stack = [square, cw_quad]
+    got = Surface.convex_many(np.array(stack, dtype=float), ["a", "b"])
+    for s, pts in zip(got, stack, strict=True):
+        ref = Surface(pts)
+        np.testing.assert_array_equal(s.main, ref.main)
+        assert s.area == pytest.approx(ref.area)
+    got = Surface.convex_many(np.array([l_shape]), ["l"])
+    assert got[0].area == pytest.approx(3.0)
+    got = Surface.convex_many(np.array([pole]), ["p"])
+    assert len(got[0].main) == 3
+    with pytest.raises(GeometryError, match=r"'bow'.*not simple"):
+        Surface.convex_many(np.array([[(0, 0), (1, 1), (1, 0), (0, 1)]], dtype=float), ["bow"])
