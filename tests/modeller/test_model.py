@@ -1543,3 +1543,20 @@ def test_attach_groups_equals_attach_many_calls_and_is_atomic():
             one.attach_groups("blk", bad)
         assert one.to_dict() == before
         assert one.pointed_by("a") == 4
+
+
+def test_generated_names_spelled_out_on_demand():
+    from workcell import Model, Surface, spatial
+
+    m = Model()
+    m.create("surface", "a", Surface.rectangle(1, 1))
+    m.create("block", "blk")
+    Ts = np.stack([spatial.translation(i, 0, 0) for i in range(4)])
+    assert m.attach_groups("blk", [("a", Ts)], return_names=False) is None
+    assert m.attach_groups("blk", [("a", Ts[:2])], return_names=False) is None
+    assert [r.name for r in m.relations("blk")] == [f"ts{i}" for i in range(1, 7)]
+    np.testing.assert_array_equal(m.relation("blk", "ts6").transform, Ts[1])
+    m.detach("blk", "ts3")
+    assert m.attach("blk", "a") == "ts7"
+    assert [r.name for r in m.relations("blk")] == ["ts1", "ts2", "ts4", "ts5", "ts6", "ts7"]
+    assert m.pointed_by("a") == 6

@@ -156,7 +156,11 @@ def build_block(
             created.append(full)
         model.create("block", name, colour=colour)
         created.append(name)
-        model.attach_groups(("block", name), [(("surface", t), Ts) for t, Ts in groups if len(Ts)])
+        model.attach_groups(
+            ("block", name),
+            [(("surface", t), Ts) for t, Ts in groups if len(Ts)],
+            return_names=False,
+        )
     except Exception:
         for n in reversed(created):
             lvl = "block" if n == name else "surface"
