@@ -62,15 +62,25 @@ def merge_vertices(
     """
     if len(vertices) == 0:
         return vertices.reshape(0, 3), faces.reshape(0, 3), np.ones(len(faces), bool)
-    # column-wise on purpose: axis reductions over (N, 3) rows are several times slower
-    cols = [np.ascontiguousarray(vertices[:, k]) for k in range(3)]
-    lo = [c.min() for c in cols]
-    cell = max(max(c.max() - m for c, m in zip(cols, lo, strict=True)), 1e-12) * rel_tol
-    s = [(c - m) * (1.0 / cell) for c, m in zip(cols, lo, strict=True)]
-    r = [np.rint(c) for c in s]
-    q = [c.astype(np.int64) for c in r]
-    key = (q[0] * np.int64(73856093)) ^ (q[1] * np.int64(19349663)) ^ (q[2] * np.int64(83492791))
-    n = len(key)
+    # column by column on purpose: axis reductions over (N, 3) rows are several times slower
+    n = len(vertices)
+    cols = [vertices[:, k] for k in range(3)]
+    lo = [float(c.min()) for c in cols]
+    cell = max(max(float(c.max()) - m for c, m in zip(cols, lo, strict=True)), 1e-12) * rel_tol
+    q = np.empty((3, n), dtype=np.int64)
+    near_mask = np.zeros(n, dtype=bool)
+    buf, r = np.empty(n), np.empty(n)
+    for k in range(3):
+        np.subtract(cols[k], lo[k], out=buf)
+        buf *= 1.0 / cell
+        np.rint(buf, out=r)
+        q[k] = r
+        buf -= r
+        np.abs(buf, out=buf)
+        near_mask |= buf > 0.499
+    key = q[0] * np.int64(73856093)
+    key ^= q[1] * np.int64(19349663)
+    key ^= q[2] * np.int64(83492791)
     order = np.argsort(key)
     ks = key[order]
     new = np.empty(n, dtype=bool)
@@ -79,17 +89,12 @@ def merge_vertices(
     inv = np.empty(n, dtype=np.int64)
     inv[order] = np.cumsum(new) - 1
     first = order[new]
-    rep = first[inv]
-    if not all(np.array_equal(c[rep], c) for c in q):  # hash collision: exact row grouping
-        _, first, inv = np.unique(
-            np.column_stack(q), axis=0, return_index=True, return_inverse=True
-        )
+    qs = q[:, order]  # equal keys must mean equal cells; else a hash collision
+    same = ~new[1:]
+    if (qs[:, 1:][:, same] != qs[:, :-1][:, same]).any():
+        _, first, inv = np.unique(q.T, axis=0, return_index=True, return_inverse=True)
         inv = inv.ravel()
-    near = np.flatnonzero(
-        (np.abs(s[0] - r[0]) > 0.499)
-        | (np.abs(s[1] - r[1]) > 0.499)
-        | (np.abs(s[2] - r[2]) > 0.499)
-    )
+    near = np.flatnonzero(near_mask)
     if len(near) > 1:  # a point near a rounding boundary may have a twin rounded the other way
         # pair the near-boundary points themselves: a cell's representative may lie up to
         # a cell diagonal away from the twin, beyond the query radius
@@ -148,6 +153,10 @@ def _group(
     if not targets:
         return []
     ids = np.fromiter(map(id, targets), dtype=np.int64, count=len(targets))
+    cut = (np.flatnonzero(ids[1:] != ids[:-1]) + 1).tolist()
+    starts, ends = [0, *cut], [*cut, len(targets)]
+    if len({ids[a] for a in starts}) == len(starts):  # each target in one contiguous run
+        return [(targets[a], Ts[a:b], np.arange(a, b)) for a, b in zip(starts, ends, strict=True)]
     _, first, inv = np.unique(ids, return_index=True, return_inverse=True)
     order = np.argsort(inv, kind="stable")
     ends = np.cumsum(np.bincount(inv))
@@ -163,12 +172,20 @@ def _outward(V: NDArray[np.float64], F: NDArray[np.int64]) -> bool:
     """Fast test: no directed edge is used twice (consistent winding) and the volume is positive."""
     if len(F) == 0:
         return True
-    key = np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2) @ np.array([len(V), 1], dtype=np.int64))
+    key = F * np.int64(len(V))
+    key += np.roll(F, -1, axis=1)  # directed edges (a, b) as a * nv + b
+    key = np.sort(key.ravel())
     if (key[1:] == key[:-1]).any():
         return False
-    c = V.mean(axis=0)
-    a, b, d = V[F[:, 0]] - c, V[F[:, 1]] - c, V[F[:, 2]] - c
-    return float(np.einsum("ij,ij->", a, np.cross(b, d))) > 0
+    # six times the signed volume, sum of a . (b x c) over faces, about the vertex mean;
+    # gathered column by column (row gathers of (M, 3) arrays are several times slower)
+    x, y, z = (V[:, k] - V[:, k].mean() for k in range(3))
+    i, j, k = (np.ascontiguousarray(F[:, c]) for c in range(3))
+    yj, zj, yk, zk = y[j], z[j], y[k], z[k]
+    six_v = (
+        x[i] @ (yj * zk - zj * yk) + y[i] @ (zj * x[k] - x[j] * zk) + z[i] @ (x[j] * yk - yj * x[k])
+    )
+    return float(six_v) > 0
 
 
 def _surface_arrays(e: _Entity) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
