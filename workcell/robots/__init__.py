@@ -1,6 +1,18 @@
-"""Robots (thesis ch. 4.2-4.3): DH chains, the built-in Pumas, forward and inverse kinematics."""
+"""Robots (thesis ch. 4.2-4.3): DH chains, the built-in Pumas, grippers, forward and inverse kinematics."""
 
+from workcell.robots.gripper import Gripper, GripperPart, attach_gripper, parallel_gripper
 from workcell.robots.puma import puma260, puma560
 from workcell.robots.robot import IKSolution, Joint, LinkGeometry, Robot
 
-__all__ = ["IKSolution", "Joint", "LinkGeometry", "Robot", "puma260", "puma560"]
+__all__ = [
+    "Gripper",
+    "GripperPart",
+    "IKSolution",
+    "Joint",
+    "LinkGeometry",
+    "Robot",
+    "attach_gripper",
+    "parallel_gripper",
+    "puma260",
+    "puma560",
+]

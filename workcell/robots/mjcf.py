@@ -1,23 +1,77 @@
-"""Robots to MuJoCo through MjSpec: one body per link, one joint per DH row, a tool site.
+"""Robots to MuJoCo through MjSpec: one body per link, one joint per DH row, link meshes, a tool site.
 
-Standard DH: joint i turns about z of frame i-1, so body i is frame i-1; it sits in body
-i-1 at what row i-1 adds besides its own joint motion. Modified DH: joint i turns about
-z of frame i, so body i is frame i. Names carry a prefix (``"puma_1."``) so several
-robots can share a cell; ``/`` is never used (dm_control reserves it).
+Standard DH: joint i turns about z of frame i-1, so body i is frame i-1 turned by joint i;
+it sits in body i-1 at what row i-1 adds besides its own joint motion, and DH frame i is
+body i's frame times :func:`fixed_part` of row i. A solid that :class:`LinkGeometry`
+places in DH frame i therefore sits in body i at ``fixed_part(row i) @ transform``.
+Modified DH: joint i turns about z of frame i, so body i is frame i. Names carry a prefix
+(``"puma_1."``) so several robots can share a cell; ``/`` is never used (dm_control
+reserves it).
+
+Link solids (``robot.geometry``) become, per solid, one visual mesh geom (the exact mesh,
+``inertia="exact"``, ``density`` kg/m^3, group 2, no contacts) and convex collision geoms
+(group 3, density 0; see :mod:`workcell.robots.meshes` for the pieces), so each body's
+mass and inertia are those of its exact meshes. A body without solids keeps a small
+placeholder inertia. A gripper (``robot.gripper``) is a body ``{prefix}{gripper}`` fixed to
+the last link at its mount, with the palm, and two finger bodies on slide joints
+``{prefix}{gripper}.left_slide`` / ``.right_slide`` (axis +y / -y of the gripper frame,
+range [0, finger_travel] m, q = 0 closed, q = finger_travel fully open, which is the
+joints' reference and initial value, as the solids are drawn). The tool site sits at
+``robot.tool``. Bodies on links up to two apart get ``<exclude>`` pairs (the gripper's
+bodies count as the last link).
+
+Mesh assets are binary STL files named ``{prefix}{block}.stl``, held in ``spec.assets``;
+:func:`export_robot` writes them beside the XML (``meshdir="meshes"``, relative).
 """
 
 from __future__ import annotations
 
+import ctypes
+import functools
+import os
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
 import mujoco
 import numpy as np
+import trimesh
 from numpy.typing import NDArray
 
+from workcell.errors import GeometryError, ModelError
+from workcell.modeller.storage import atomic_write_text
+from workcell.robots.meshes import atomic_write_bytes, convex_pieces, stl_bytes
 from workcell.robots.robot import Joint, Robot
-from workcell.spatial import quat_from_matrix, rot_x, rot_z, translation
+from workcell.spatial import invert, is_rigid, quat_from_matrix, rot_x, rot_z, translation
 
-__all__ = ["TOOL_SITE", "body_name", "joint_name", "kinematic_model", "robot_spec"]
+__all__ = [
+    "ARM_DENSITY",
+    "COLLISION_GROUP",
+    "MESHDIR",
+    "TOOL_SITE",
+    "VISUAL_GROUP",
+    "body_name",
+    "export_robot",
+    "finger_joint_names",
+    "fixed_part",
+    "gripper_body_name",
+    "joint_name",
+    "kinematic_model",
+    "robot_spec",
+    "spec_to_xml",
+]
 
 TOOL_SITE = "tool"
+ARM_DENSITY = 2700.0  # kg/m^3, aluminium
+VISUAL_GROUP = 2
+COLLISION_GROUP = 3
+MESHDIR = "meshes"
+_EXACT = mujoco.mjtMeshInertia.mjMESH_INERTIA_EXACT
+_MESH = mujoco.mjtGeom.mjGEOM_MESH
+
+Array = NDArray[np.float64]
 
 
 def body_name(prefix: str, i: int) -> str:
@@ -30,11 +84,24 @@ def joint_name(robot: Robot, prefix: str, i: int) -> str:
     return f"{prefix}{robot.joints[i].name}"
 
 
-def _pos_quat(T: NDArray[np.float64]) -> tuple[list[float], list[float]]:
+def gripper_body_name(robot: Robot, prefix: str = "") -> str:
+    """Name of the gripper's (palm) body; ModelError when the robot has no gripper."""
+    if robot.gripper is None:
+        raise ModelError(f"robot '{robot.name}' has no gripper")
+    return f"{prefix}{robot.gripper.name}"
+
+
+def finger_joint_names(robot: Robot, prefix: str = "") -> tuple[str, str]:
+    """Names of the left and right finger slide joints (q in m, 0 = closed)."""
+    g = gripper_body_name(robot, prefix)
+    return f"{g}.left_slide", f"{g}.right_slide"
+
+
+def _pos_quat(T: Array) -> tuple[list[float], list[float]]:
     return T[:3, 3].tolist(), quat_from_matrix(T[:3, :3]).tolist()
 
 
-def fixed_part(j: Joint, convention: str) -> NDArray[np.float64]:
+def fixed_part(j: Joint, convention: str) -> Array:
     """The constant part of a DH row once the joint's own motion about/along z is taken out.
 
     Standard: Rz(theta0) Tz(d0) Tx(a) Rx(alpha); modified: Rx(alpha) Tx(a) Rz(theta0) Tz(d0),
@@ -47,23 +114,168 @@ def fixed_part(j: Joint, convention: str) -> NDArray[np.float64]:
     return xa @ rz if convention == "modified" else rz @ xa
 
 
-def robot_spec(robot: Robot, *, prefix: str = "", mass: float = 0.1) -> mujoco.MjSpec:
-    """An MjSpec of the robot's kinematic chain, with the tool site ``{prefix}tool``.
+def _frame_in_body(robot: Robot, k: int) -> Array:
+    """DH frame k expressed in body k's frame (k = 0..n)."""
+    if k == 0 or robot.convention == "modified":
+        return np.eye(4)
+    return fixed_part(robot.joints[k - 1], "standard")
 
-    Each link body gets a small placeholder inertia (``mass`` kg, a 5 cm solid sphere) so
-    the model compiles; callers that add link solids replace it. Joint ranges are the
+
+@dataclass
+class _Meshes:
+    """Mesh assets and unique names while one spec is built."""
+
+    spec: mujoco.MjSpec
+    prefix: str
+    assets: dict[str, bytes] = field(default_factory=dict)
+    names: dict[str, set[str]] = field(default_factory=lambda: {"mesh": set(), "geom": set()})
+
+    def unique(self, name: str, kind: str = "geom") -> str:
+        """``name``, or ``name.2``, ``name.3`` ... when a ``kind`` of that name exists."""
+        taken = self.names[kind]
+        out, k = name, 1
+        while out in taken:
+            k += 1
+            out = f"{name}.{k}"
+        taken.add(out)
+        return out
+
+    def add(self, name: str, mesh: trimesh.Trimesh) -> str:
+        """Register ``mesh`` as asset ``name`` (made unique); return the mesh name."""
+        mname = self.unique(name, "mesh")
+        file = f"{mname}.stl"
+        self.assets[file] = stl_bytes(mesh)
+        self.spec.add_mesh(name=mname, file=file, inertia=_EXACT)
+        return mname
+
+
+def _placed_meshes(
+    robot: Robot, block: str, T: Array, reg: _Meshes, cache: dict[str, tuple[str, list[str]]]
+) -> tuple[str, list[str], Array]:
+    """(visual mesh, collision meshes, geom pose) of ``block`` placed by T in a body."""
+    model = robot.model
+    if is_rigid(T):
+        if block not in cache:
+            pieces, convex = convex_pieces(model, block)
+            vis = reg.add(f"{reg.prefix}{block}", model.world_mesh(("block", block)))
+            col = (
+                [vis]
+                if convex
+                else [reg.add(f"{reg.prefix}{block}.hull{i}", p) for i, p in enumerate(pieces)]
+            )
+            cache[block] = (vis, col)
+        vis, col = cache[block]
+        return vis, col, T
+    # a scaled, sheared or mirrored placement is baked into new vertices (geom poses are
+    # rigid); trimesh re-winds the faces of a mirrored mesh itself
+    m = model.world_mesh(("block", block)).copy().apply_transform(T)
+    vis = reg.add(f"{reg.prefix}{block}.placed", m)
+    pieces, convex = convex_pieces(model, block)
+    if convex:
+        col = [vis]
+    else:
+        col = []
+        for i, p in enumerate(pieces):
+            q = p.copy().apply_transform(T)
+            col.append(reg.add(f"{reg.prefix}{block}.placed.hull{i}", q.convex_hull))
+    return vis, col, np.eye(4)
+
+
+def _add_solid(
+    body: mujoco.MjsBody,
+    robot: Robot,
+    block: str,
+    T: Array,
+    colour: tuple[float, ...] | None,
+    density: float,
+    reg: _Meshes,
+    cache: dict[str, tuple[str, list[str]]],
+) -> None:
+    """One visual geom (mass carrier) and the collision geoms of a solid, placed by T."""
+    rgba = list(colour) if colour is not None else [0.7, 0.7, 0.72, 1.0]
+    vis, col, P = _placed_meshes(robot, block, T, reg, cache)
+    pos, quat = _pos_quat(P)
+    gname = reg.unique(f"{reg.prefix}{block}")
+    body.add_geom(
+        name=gname,
+        type=_MESH,
+        meshname=vis,
+        pos=pos,
+        quat=quat,
+        density=density,
+        contype=0,
+        conaffinity=0,
+        group=VISUAL_GROUP,
+        rgba=rgba,
+    )
+    for i, c in enumerate(col):
+        body.add_geom(
+            name=f"{gname}.col{i}",
+            type=_MESH,
+            meshname=c,
+            pos=pos,
+            quat=quat,
+            density=0.0,
+            contype=1,
+            conaffinity=1,
+            group=COLLISION_GROUP,
+            rgba=[*rgba[:3], 0.5],
+        )
+
+
+def _check_prefix(prefix: str) -> None:
+    if "/" in prefix:
+        raise ModelError(
+            f"prefix {prefix!r} contains '/', which dm_control reserves; use e.g. 'puma_1.'"
+        )
+
+
+def robot_spec(
+    robot: Robot,
+    *,
+    prefix: str = "",
+    geometry: bool = True,
+    density: float = ARM_DENSITY,
+    mass: float = 0.1,
+) -> mujoco.MjSpec:
+    """An MjSpec of the robot with the tool site ``{prefix}tool`` (see the module doc).
+
+    With ``geometry`` (and link solids on the robot) every link carries its meshes at
+    ``density`` (kg/m^3) and the gripper, if any, its bodies and finger joints; the mesh
+    bytes are in ``spec.assets``. Otherwise, and for links without solids, each body
+    gets a placeholder inertia (``mass`` kg, a 5 cm solid sphere). Joint ranges are the
     robot's limits (radians / metres).
     """
+    _check_prefix(prefix)
+    if not (np.isfinite(density) and density > 0):
+        raise GeometryError(f"density must be a positive number (kg/m^3), got {density!r}")
     spec = mujoco.MjSpec()
     spec.compiler.degree = False
     spec.modelname = robot.name
+    with_geo = geometry and robot.model is not None and bool(robot.geometry)
+    gripper = robot.gripper if with_geo else None
+    gripper_blocks = {p.block for p in gripper.geometry} if gripper is not None else set()
+    reg = _Meshes(spec, prefix)
+    cache: dict[str, tuple[str, list[str]]] = {}
     inertia = [0.4 * mass * 0.05**2] * 3
+
+    def fill(body: mujoco.MjsBody, k: int) -> None:
+        solids = [] if not with_geo else robot.geometry
+        mine = [g for g in solids if g.link == k and g.block not in gripper_blocks]
+        if not mine:
+            body.mass, body.inertia = mass, inertia
+            return
+        F = _frame_in_body(robot, k)
+        for g in mine:
+            _add_solid(body, robot, g.block, F @ g.transform, g.colour, density, reg, cache)
+
+    bodies: list[tuple[str, int]] = []
     parent = spec.worldbody.add_body(name=body_name(prefix, 0))
     parent.pos, parent.quat = _pos_quat(robot.base)
-    parent.mass, parent.inertia = mass, inertia
+    fill(parent, 0)
+    bodies.append((parent.name, 0))
     for i, j in enumerate(robot.joints):
         body = parent.add_body(name=body_name(prefix, i + 1))
-        body.mass, body.inertia = mass, inertia
         if robot.convention == "standard":
             placement = fixed_part(robot.joints[i - 1], "standard") if i > 0 else np.eye(4)
         else:
@@ -77,13 +289,145 @@ def robot_spec(robot: Robot, *, prefix: str = "", mass: float = 0.1) -> mujoco.M
             range=list(j.limits),
             limited=mujoco.mjtLimited.mjLIMITED_TRUE,
         )
+        fill(body, i + 1)
+        bodies.append((body.name, i + 1))
         parent = body
-    last = fixed_part(robot.joints[-1], "standard") if robot.convention == "standard" else np.eye(4)
-    pos, quat = _pos_quat(last @ robot.tool)
-    parent.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)
+    n = robot.dof
+    last = _frame_in_body(robot, n)
+    if gripper is None:
+        pos, quat = _pos_quat(last @ robot.tool)
+        parent.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)
+    else:
+        gname = gripper_body_name(robot, prefix)
+        gbody = parent.add_body(name=gname)
+        gbody.pos, gbody.quat = _pos_quat(last @ gripper.mount)
+        bodies.append((gname, n))
+        for p in gripper.geometry:
+            if p.role == "palm":
+                _add_solid(gbody, robot, p.block, p.transform, p.colour, density, reg, cache)
+        for role, axis, jname in zip(
+            ("left", "right"),
+            ([0, 1, 0], [0, -1, 0]),
+            finger_joint_names(robot, prefix),
+            strict=True,
+        ):
+            fbody = gbody.add_body(name=f"{gname}.{role}")
+            fbody.add_joint(
+                name=jname,
+                type=mujoco.mjtJoint.mjJNT_SLIDE,
+                axis=axis,
+                range=[0.0, gripper.finger_travel],
+                limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                ref=gripper.finger_travel,
+            )
+            parts = [p for p in gripper.geometry if p.role == role]
+            for p in parts:
+                _add_solid(fbody, robot, p.block, p.transform, p.colour, density, reg, cache)
+            if not parts:
+                fbody.mass, fbody.inertia = mass, inertia
+            bodies.append((fbody.name, n))
+        pos, quat = _pos_quat(invert(gripper.mount) @ robot.tool)
+        gbody.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)
+    for a in range(len(bodies)):
+        for b in range(a + 1, len(bodies)):
+            if abs(bodies[a][1] - bodies[b][1]) <= 2:
+                spec.add_exclude(bodyname1=bodies[a][0], bodyname2=bodies[b][0])
+    spec.assets = reg.assets
     return spec
 
 
 def kinematic_model(robot: Robot, *, prefix: str = "") -> mujoco.MjModel:
     """Compiled kinematic-only model of the robot (placeholder inertias, no geometry)."""
-    return robot_spec(robot, prefix=prefix).compile()
+    return robot_spec(robot, prefix=prefix, geometry=False).compile()
+
+
+@functools.cache
+def _xml_format_hooks() -> tuple[ctypes._CFuncPtr, ctypes._CFuncPtr] | None:
+    """MuJoCo's (get, set) hooks of its XML significant digits; None when unusable.
+
+    mujoco 3.17 exports ``int _mjPRIVATE__get_xml_precision()`` and
+    ``void _mjPRIVATE__set_xml_precision(int)`` (a thread-local digit count, default 6);
+    other releases differ (some take a printf format), so the hooks are used only on
+    3.17 and only when the current value looks like a digit count.
+    """
+    if not mujoco.__version__.startswith("3.17."):
+        return None
+    here = Path(mujoco.__file__).parent
+    for pattern in ("libmujoco.so*", "libmujoco*.dylib", "mujoco.dll"):
+        for path in sorted(here.glob(pattern)):
+            try:
+                lib = ctypes.CDLL(str(path))
+                get, put = lib._mjPRIVATE__get_xml_precision, lib._mjPRIVATE__set_xml_precision
+            except (OSError, AttributeError):
+                continue
+            get.restype, get.argtypes = ctypes.c_int, []
+            put.restype, put.argtypes = None, [ctypes.c_int]
+            return (get, put) if 0 < get() <= 30 else None
+    return None
+
+
+@contextmanager
+def _full_precision() -> Iterator[None]:
+    """Make MuJoCo's XML writer print 17 significant digits (its default prints 6).
+
+    The setting is thread-local in MuJoCo: set, used and restored in the calling thread.
+    """
+    hooks = _xml_format_hooks()
+    if hooks is None:
+        warnings.warn(
+            "MuJoCo's XML number precision cannot be set in this release: the saved XML "
+            "has 6 significant digits (tool poses off by ~1e-7 m)",
+            stacklevel=3,
+        )
+        yield
+        return
+    get, put = hooks
+    old = get()
+    put(17)
+    try:
+        yield
+    finally:
+        put(old)
+
+
+def spec_to_xml(spec: mujoco.MjSpec) -> str:
+    """MJCF text of ``spec`` with every number at full double precision.
+
+    MuJoCo's writer prints 6 significant digits by default, which moves a saved robot's
+    tool by ~1e-7 m; this switches it to 17 for the call (through the library's exported
+    XML-precision hook, a private symbol of mujoco 3.17; elsewhere it warns and keeps 6). Raises ValueError as
+    ``spec.to_xml`` does when the spec does not compile.
+    """
+    with _full_precision():
+        return spec.to_xml()
+
+
+def export_robot(
+    robot: Robot,
+    out_dir: str | os.PathLike,
+    *,
+    prefix: str = "",
+    file_name: str | None = None,
+    density: float = ARM_DENSITY,
+) -> Path:
+    """Write the robot as one MJCF file plus STL meshes in ``out_dir/meshes``; return the XML path.
+
+    The XML (``file_name``, default ``"{prefix}{robot.name}.xml"``) names its meshes
+    relative to itself (``meshdir="meshes"``), so the folder loads from any working
+    directory, in plain MuJoCo and in dm_control. The model is compiled before anything
+    is written (a MuJoCo error raises GeometryError); every file is written atomically.
+    """
+    spec = robot_spec(robot, prefix=prefix, density=density)
+    spec.compiler.meshdir = MESHDIR
+    try:
+        spec.compile()
+        xml = spec_to_xml(spec)
+    except ValueError as exc:
+        raise GeometryError(f"robot '{robot.name}' does not compile in MuJoCo: {exc}") from exc
+    out = Path(out_dir)
+    (out / MESHDIR).mkdir(parents=True, exist_ok=True)
+    for file, data in spec.assets.items():
+        atomic_write_bytes(out / MESHDIR / file, data)
+    path = out / (file_name or f"{prefix}{robot.name}.xml")
+    atomic_write_text(path, xml)
+    return path

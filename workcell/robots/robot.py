@@ -25,6 +25,7 @@ from workcell.spatial import as_transform
 
 if TYPE_CHECKING:
     from workcell.modeller.model import Model
+    from workcell.robots.gripper import Gripper
 
 __all__ = ["IKSolution", "Joint", "LinkGeometry", "Robot"]
 
@@ -119,6 +120,7 @@ class Robot:
     model: Model | None = None
     geometry: tuple[LinkGeometry, ...] = ()
     source: str = ""
+    gripper: Gripper | None = None
 
     def __post_init__(self) -> None:
         self.joints = tuple(self.joints)
