@@ -1,0 +1,639 @@
+"""Closed-form inverse kinematics of the Puma family (thesis §4.3).
+
+A Puma-family robot is a 6R arm in standard DH with the Puma 560 convention:
+alpha = (90, 0, -90, 90, -90, 0) deg, a1 = 0, d2 = 0, a4 = a5 = a6 = 0, d5 = d6 = 0
+(a spherical wrist: the axes of joints 4, 5, 6 meet at the wrist centre, the origin of
+frames 4, 5 and 6). Free parameters, read from the robot: d1 (shoulder height), a2
+(upper arm), a3 and d4 (forearm), d3 (shoulder offset) and the joint offsets; the DH
+angle is theta_i = q_i + offset_i. Units: metres and radians.
+
+Derivation (frame i follows joint i; theta23 = theta2 + theta3). Strip base and tool:
+T6 = inv(base) @ T @ inv(tool); its position p is the wrist centre. Relative to the
+shoulder (the origin of frame 1, at height d1 on the joint 1 axis), with
+r = |(px, py)| and z = pz - d1:
+
+- joint 1: the wrist centre lies d3 along z1 = (sin theta1, -cos theta1, 0), so
+  px sin theta1 - py cos theta1 = d3 and theta1 = atan2(py, px) + atan2(d3, h) with
+  h = +-sqrt(r^2 - d3^2), the reach of the wrist centre along x1 (h >= 0: right arm).
+- joints 2, 3: in the arm plane (x1, y1; y1 is z of frame 0) the wrist centre is
+  (h, z) = a2 (c2, s2) + Rot(theta23) (a3, d4). The law of cosines gives the angle psi
+  between the upper arm and the shoulder-wrist line, cos psi = (a2^2 + rho^2 - L^2) /
+  (2 a2 rho) with rho = |(h, z)| and L = sqrt(a3^2 + d4^2), so theta2 = atan2(z, h) +- psi
+  and theta23 = atan2(z - a2 s2, h - a2 c2) - atan2(d4, a3).
+- joints 4, 5, 6: M = R03^T R06 = Rz(theta4) Ry(-theta5) Rz(theta6) (ZYZ Euler angles
+  with the middle angle negated), so theta5 = atan2(-+sqrt(M02^2 + M12^2), M22),
+  theta4 = atan2(M12, M02) for sin theta5 < 0, and theta6 from
+  Ry(theta5) Rz(-theta4) M = Rz(theta6). The twin (theta4 + pi, -theta5, theta6 + pi)
+  gives the same wrist rotation.
+
+Configuration letters (``IKSolution.config``), defined as P. Corke's Robotics Toolbox
+does for the Puma 560 (``ikine6s`` / ``ikine_a``, after Paul and Zhang 1986), on the DH
+angles:
+
+- arm ``r`` (right) when h >= 0, i.e. the wrist centre lies on the +x1 side of the
+  joint 1 axis (theta1 = atan2(py, px) + asin(d3 / r)); ``l`` (left) when h < 0
+  (theta1 = atan2(py, px) + pi - asin(d3 / r)). The Puma 560's zero pose is right-armed.
+- elbow ``u`` (up) when the elbow (origin of frame 2) lies above the straight line from
+  the shoulder (origin of frame 1) to the wrist centre in the arm plane, "above" being
+  the +z side of frame 0 (theta2 = atan2(z, h) + psi for a right arm, - psi for a left
+  arm); ``d`` (down) when below.
+- wrist ``n`` (no flip) when sin(theta5) < 0; ``f`` (flip) when sin(theta5) > 0 (with
+  an explicit ``n`` the toolbox takes theta4 = atan2(V323, V313), which makes
+  sin theta5 negative; ``f`` adds pi to theta4; the Python toolbox's ``ikine_a`` agrees:
+  its unflipped ZYZ angle is >= 0 and is negated into theta5). An arm/elbow branch whose
+  wrist is aligned (sin theta5 = 0) gives one solution, marked ``n``.
+
+Examples: the Puma 560's zero pose qz is ``rd`` (the elbow lies below the line from the
+shoulder to the wrist centre; wrist aligned); its nominal pose qn = (0, 45, -180, 0, 45,
+0) deg is ``ruf``. (The MATLAB toolbox, given neither ``n`` nor ``f``, takes the ``f``
+branch, its default n4 = -1.)
+
+Wrist singularity: ``|sin theta5| < SINGULAR_TOL`` (1e-6) sets ``singular=True``; the
+solution is still exact (theta4 comes from the pose, theta6 is solved from theta4). When
+the wrist axes 4 and 6 are aligned to machine precision (``|sin theta5| <
+ALIGNED_TOL`` = 1e-12, orientation error at most ~1e-12 rad), only theta4 + theta6 (or
+theta6 - theta4) is determined: q4 is set to the current q4 (or 0) and q6 solved so the
+pose is exact. (Rounding puts |sin theta5| of a pose made with q5 = 0 near 1e-16 to 3e-13;
+a pose that lands above 1e-12 is solved as merely near-singular: exact, flagged, with q4
+taken from the pose.) A wrist centre on the joint 1 axis of an arm with d3 = 0 leaves q1
+free: it is set to the current q1 (or 0) and the solutions are flagged singular.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from workcell import spatial
+from workcell.errors import GeometryError, KinematicsError
+from workcell.robots.robot import IKSolution, Robot
+
+__all__ = [
+    "ALIGNED_TOL",
+    "CONFIGS",
+    "SINGULAR_TOL",
+    "puma_config",
+    "puma_ik",
+    "puma_ik_batch",
+    "puma_ik_report",
+]
+
+Array = NDArray[np.float64]
+
+CONFIGS: tuple[str, ...] = ("lun", "luf", "ldn", "ldf", "run", "ruf", "rdn", "rdf")
+"""Slot order of :func:`puma_ik_batch` and the default order of :func:`puma_ik`."""
+SINGULAR_TOL = 1e-6
+"""|sin theta5| below which a solution is flagged ``singular``."""
+ALIGNED_TOL = 1e-12
+"""|sin theta5| below which the wrist axes 4 and 6 count as aligned (q4 then chosen)."""
+DEDUPE_TOL = 1e-9  # rad: solutions closer than this (modulo 2 pi) are the same
+REACH_TOL = 1e-12  # m: slack on the reach tests (points on the boundary are reachable)
+EXACT_TOL = 1e-9  # m and rad: a solution is exact when FK(q) is this close to T
+_DEGENERATE = 1e-6  # branch separation below which duplicates are looked for
+_ALPHA = np.radians([90.0, 0.0, -90.0, 90.0, -90.0, 0.0])
+_TWO_PI = 2.0 * math.pi
+_PI = math.pi
+
+
+@dataclass(frozen=True)
+class _Puma:
+    """The parameters a Puma solver needs, read once per robot (its joints tuple)."""
+
+    a2: float
+    a3: float
+    d1: float
+    d3: float
+    d4: float
+    L: float  # forearm length sqrt(a3^2 + d4^2), m
+    gamma: float  # atan2(d4, a3), rad
+    offset: Array  # (6,) rad
+    lo: Array  # (6,) rad
+    hi: Array  # (6,) rad
+    cos_sin: Array  # (6, 2): offset - (0, pi/2), so cos(q + cos_sin) = (cos, sin) of theta
+    lo_turns: Array  # lo / 2 pi - 1e-12 (the slack of Robot.wrap_to_limits), turns
+    hi_turns: Array  # hi / 2 pi + 1e-12, turns
+    C0: Array  # (6, 4, 4): A_i(theta) = C0 + cos(theta) Cc + sin(theta) Cs
+    Ccs: Array  # (6, 2, 16): Cc and Cs, flattened
+
+
+@dataclass(frozen=True)
+class _Frames:
+    """inv(base), inv(tool) and the DH terms with base and tool folded into links 1 and 6."""
+
+    key: bytes  # base and tool contents
+    params: _Puma  # the joint parameters the folded terms were made from
+    plain: bool  # base and tool are both the identity
+    base_inv: Array
+    tool_inv: Array
+    C0: Array  # (6, 1, 16)
+    Ccs: Array  # (6, 2, 16)
+
+
+_CACHE: weakref.WeakKeyDictionary[Robot, tuple[object, _Puma]] = weakref.WeakKeyDictionary()
+_FRAMES: weakref.WeakKeyDictionary[Robot, _Frames] = weakref.WeakKeyDictionary()
+
+
+def _check_structure(robot: Robot) -> _Puma:
+    """Validate the Puma 560 DH structure; raise KinematicsError saying what differs."""
+    where = f"robot '{robot.name}' is not a Puma-family arm"
+    if robot.convention != "standard":
+        raise KinematicsError(f"{where}: closed-form IK needs standard DH, got {robot.convention}")
+    if robot.dof != 6 or any(j.kind != "revolute" for j in robot.joints):
+        kinds = [j.kind for j in robot.joints]
+        raise KinematicsError(f"{where}: closed-form IK needs 6 revolute joints, got {kinds}")
+    J = robot.joints
+    bad = []
+    for i, j in enumerate(J):
+        if abs(j.alpha - _ALPHA[i]) > 1e-9:
+            bad.append(
+                f"alpha{i + 1} = {math.degrees(j.alpha):.6g} deg "
+                f"(need {math.degrees(_ALPHA[i]):.0f})"
+            )
+    need_zero = [("a1", J[0].a), ("d2", J[1].d), ("a4", J[3].a), ("a5", J[4].a), ("a6", J[5].a)]
+    need_zero += [("d5", J[4].d), ("d6", J[5].d)]
+    bad += [f"{n} = {v:.6g} m (need 0)" for n, v in need_zero if abs(v) > 1e-12]
+    a2, a3, d4 = J[1].a, J[2].a, J[3].d
+    L = math.hypot(a3, d4)
+    if a2 <= 0.0 or L <= 0.0:
+        bad.append(f"a2 = {a2:.6g} m and sqrt(a3^2 + d4^2) = {L:.6g} m (both need > 0)")
+    if bad:
+        raise KinematicsError(
+            f"{where} (standard DH, alpha = (90, 0, -90, 90, -90, 0) deg, a1 = d2 = 0, "
+            f"spherical wrist a4 = a5 = a6 = d5 = d6 = 0): " + "; ".join(bad)
+        )
+    a = np.array([j.a for j in J])
+    d = np.array([j.d for j in J])
+    ca, sa = np.cos(_ALPHA), np.sin(_ALPHA)
+    ca[np.abs(ca) < 1e-15] = 0.0
+    C0 = np.zeros((6, 4, 4))
+    C0[:, 2, 1], C0[:, 2, 2], C0[:, 2, 3], C0[:, 3, 3] = sa, ca, d, 1.0
+    Cc = np.zeros((6, 4, 4))
+    Cc[:, 0, 0], Cc[:, 0, 3], Cc[:, 1, 1], Cc[:, 1, 2] = 1.0, a, ca, -sa
+    Cs = np.zeros((6, 4, 4))
+    Cs[:, 0, 1], Cs[:, 0, 2], Cs[:, 1, 0], Cs[:, 1, 3] = -ca, sa, 1.0, a
+    lo, hi = robot.lower, robot.upper
+    offset = np.array([j.offset for j in J])
+    return _Puma(
+        a2=float(a2),
+        a3=float(a3),
+        d1=float(J[0].d),
+        d3=float(J[2].d),
+        d4=float(d4),
+        L=L,
+        gamma=math.atan2(d4, a3),
+        offset=offset,
+        lo=lo,
+        hi=hi,
+        cos_sin=offset[:, None] - np.array([0.0, 0.5 * math.pi]),
+        lo_turns=lo / _TWO_PI - 1e-12,
+        hi_turns=hi / _TWO_PI + 1e-12,
+        C0=C0,
+        Ccs=np.stack([Cc, Cs], axis=1).reshape(6, 2, 16),
+    )
+
+
+def _params(robot: Robot) -> _Puma:
+    """The robot's Puma parameters (validated once per joints tuple)."""
+    if not isinstance(robot, Robot):
+        raise KinematicsError(f"puma_ik needs a Robot, got {type(robot).__name__}")
+    hit = _CACHE.get(robot)
+    if hit is not None and hit[0] is robot.joints:
+        return hit[1]
+    P = _check_structure(robot)
+    _CACHE[robot] = (robot.joints, P)
+    return P
+
+
+def _rigid_inverse(T: Array) -> Array:
+    Ti = np.eye(4)
+    Ti[:3, :3] = T[:3, :3].T
+    Ti[:3, 3] = -T[:3, :3].T @ T[:3, 3]
+    return Ti
+
+
+def _frames(robot: Robot, P: _Puma) -> _Frames:
+    """The robot's base/tool data, cached on their contents."""
+    key = robot.base.tobytes() + robot.tool.tobytes()
+    hit = _FRAMES.get(robot)
+    if hit is not None and hit.params is P and hit.key == key:
+        return hit
+    C0 = P.C0.copy()
+    Ccs = P.Ccs.reshape(6, 2, 4, 4).copy()
+    C0[0], Ccs[0] = robot.base @ C0[0], robot.base @ Ccs[0]
+    C0[5], Ccs[5] = C0[5] @ robot.tool, Ccs[5] @ robot.tool
+    F = _Frames(
+        key=key,
+        params=P,
+        plain=bool((robot.base == np.eye(4)).all() and (robot.tool == np.eye(4)).all()),
+        base_inv=_rigid_inverse(robot.base),
+        tool_inv=_rigid_inverse(robot.tool),
+        C0=C0.reshape(6, 1, 16),
+        Ccs=Ccs.reshape(6, 2, 16),
+    )
+    _FRAMES[robot] = F
+    return F
+
+
+def _reference(robot: Robot, q_current: ArrayLike | None) -> Array | None:
+    if q_current is None:
+        return None
+    q = np.asarray(q_current, dtype=np.float64)
+    if q.shape != (6,) or not np.all(np.isfinite(q)):
+        raise KinematicsError(
+            f"robot '{robot.name}': q_current must be 6 finite joint values (rad), got {q_current!r}"
+        )
+    return q
+
+
+def _wrap_pi(q: Array) -> Array:
+    """Angles wrapped to (-pi, pi] (rad)."""
+    return _PI - np.mod(_PI - q, _TWO_PI)
+
+
+def _wrap_to_limits(P: _Puma, Q: Array, ref: Array | None) -> tuple[Array, NDArray[np.bool_]]:
+    """Vectorised ``Robot.wrap_to_limits``: the 2 pi-equivalent of each Q[..., j] inside
+    [lo_j, hi_j] nearest to ref[..., j] (to Q itself when ref is None); returns (the
+    wrapped vectors, Q itself where some joint has no equivalent, and ok per joint)."""
+    turns = Q * (1.0 / _TWO_PI)
+    k_lo = np.ceil(P.lo_turns - turns)
+    k_hi = np.floor(P.hi_turns - turns)
+    if ref is None:
+        k = np.minimum(np.maximum(k_lo, 0.0), k_hi)
+    else:
+        k = np.minimum(np.maximum(np.rint(ref * (1.0 / _TWO_PI) - turns), k_lo), k_hi)
+    Qw = np.minimum(np.maximum(Q + _TWO_PI * k, P.lo), P.hi)
+    ok = k_lo <= k_hi
+    return np.where(ok.all(axis=-1, keepdims=True), Qw, Q), ok
+
+
+def _distinct(Q: Array) -> NDArray[np.bool_]:
+    """Mask of rows of Q (m, 6) that differ (modulo 2 pi, by DEDUPE_TOL) from every earlier row."""
+    D = np.abs(_wrap_pi(Q[:, None, :] - Q[None, :, :])).max(axis=-1)
+    same = np.tril(D < DEDUPE_TOL, k=-1)
+    return ~same.any(axis=1)
+
+
+# ---------------------------------------------------------------- the single-pose solver
+def _unreachable(P: _Puma, r: float, z: float, rho: float) -> str:
+    """Why the wrist centre at horizontal radius r, height z over the shoulder is out of reach."""
+    d3 = abs(P.d3)
+    dist = math.hypot(r, z)
+    if r < d3 - REACH_TOL:
+        return (
+            f"out of reach: the wrist centre is {r:.4g} m from the joint 1 axis, inside the "
+            f"shoulder-offset cylinder of radius |d3| = {d3:.4g} m"
+        )
+    far = P.a2 + P.L
+    if rho > far + REACH_TOL:
+        return (
+            f"out of reach: the wrist centre is {dist:.4g} m from the shoulder, beyond the "
+            f"arm's reach of {math.hypot(far, d3):.4g} m"
+        )
+    near = abs(P.a2 - P.L)
+    return (
+        f"out of reach: the wrist centre is {dist:.4g} m from the shoulder, closer than the "
+        f"arm's minimum reach of {math.hypot(near, d3):.4g} m"
+    )
+
+
+def _solve_one(
+    P: _Puma, T6: list[list[float]], ref: Array | None
+) -> tuple[list[tuple[int, list[float], bool]], bool, str]:
+    """DH angles of every branch of one stripped pose T6 (rows as lists).
+
+    Returns ([(slot in CONFIGS, theta (6,), singular)], maybe_duplicates, reason).
+    """
+    (r00, _, r02, px), (r10, _, r12, py), (r20, _, r22, pz) = T6[0], T6[1], T6[2]
+    z = pz - P.d1
+    r2 = px * px + py * py
+    d3 = P.d3
+    hr2 = r2 - d3 * d3
+    rho2 = max(hr2, 0.0) + z * z
+    rho = math.sqrt(rho2)
+    r = math.sqrt(r2)
+    if r < abs(d3) - REACH_TOL or rho > P.a2 + P.L + REACH_TOL or rho < abs(P.a2 - P.L) - REACH_TOL:
+        return [], False, _unreachable(P, r, z, rho)
+    hr = math.sqrt(max(hr2, 0.0))
+    shoulder_free = r < REACH_TOL  # only reachable with d3 = 0: theta1 is free
+    if shoulder_free:
+        phi = (0.0 if ref is None else float(ref[0])) + float(P.offset[0])
+    else:
+        phi = math.atan2(py, px)
+    delta = math.atan2(d3, hr)
+    a2, L = P.a2, P.L
+    cpsi = (a2 * a2 + rho2 - L * L) / (2.0 * a2 * rho) if rho > 0.0 else 0.0
+    psi = math.acos(min(1.0, max(-1.0, cpsi)))
+    maybe_dup = hr < _DEGENERATE * max(r, 1e-300) or min(psi, _PI - psi) < _DEGENERATE
+    ref4 = (0.0 if ref is None else float(ref[3])) + float(P.offset[3])
+    out: list[tuple[int, list[float], bool]] = []
+    slot = 0
+    for right in (False, True):
+        if right:
+            t1, h = phi + delta, hr
+        else:
+            t1, h = phi + _PI - delta, -hr
+        c1, s1 = math.cos(t1), math.sin(t1)
+        beta = math.atan2(z, h)
+        ax1 = c1 * r02 + s1 * r12  # approach and normal vectors along x1 and -z1
+        ay3 = c1 * r12 - s1 * r02
+        nx1 = c1 * r00 + s1 * r10
+        ny3 = c1 * r10 - s1 * r00
+        for up in (True, False):
+            t2 = beta + psi if up == right else beta - psi
+            t23 = math.atan2(z - a2 * math.sin(t2), h - a2 * math.cos(t2)) - P.gamma
+            c23, s23 = math.cos(t23), math.sin(t23)
+            m02 = c23 * ax1 + s23 * r22
+            m12 = ay3
+            m22 = c23 * r22 - s23 * ax1
+            m00 = c23 * nx1 + s23 * r20
+            m10 = ny3
+            m20 = c23 * r20 - s23 * nx1
+            s5abs = math.hypot(m02, m12)
+            singular = s5abs < SINGULAR_TOL or shoulder_free
+            if s5abs < ALIGNED_TOL:
+                t4, t5 = ref4, (0.0 if m22 > 0.0 else _PI)
+            else:
+                t4, t5 = math.atan2(m12, m02), math.atan2(-s5abs, m22)
+            c4, s4, c5, s5 = math.cos(t4), math.sin(t4), math.cos(t5), math.sin(t5)
+            t6 = math.atan2(-s4 * m00 + c4 * m10, c5 * (c4 * m00 + s4 * m10) + s5 * m20)
+            out.append((slot, [t1, t2, t23 - t2, t4, t5, t6], singular))
+            if s5abs >= ALIGNED_TOL:
+                out.append((slot + 1, [t1, t2, t23 - t2, t4 + _PI, -t5, t6 + _PI], singular))
+            slot += 2
+    return out, maybe_dup or shoulder_free, ""
+
+
+def _fk_squared_errors(F: _Frames, P: _Puma, Q: Array, T: Array) -> list[list[float]]:
+    """For each Q[i] (rad), the squared distances between the columns of FK(Q[i]) (tool in
+    the base frame) and of T: x, y, z axes and position (m^2). The rotation angle between
+    the two is 2 asin(|R1 - R2|_F / sqrt(8)), accurate for small angles."""
+    cs = np.cos(Q[..., None] + P.cos_sin)  # (m, 6, 2): cos, sin of theta = q + offset
+    A = (cs[:, :, None, :] @ F.Ccs + F.C0).reshape(-1, 6, 4, 4)
+    B = A[:, 0::2] @ A[:, 1::2]
+    D = (B[:, 0] @ B[:, 1] @ B[:, 2])[:, :3, :] - T[:3, :]
+    return (D * D).sum(axis=1).tolist()
+
+
+def _pose(robot: Robot, P: _Puma, T: ArrayLike) -> tuple[Array, list[list[float]], _Frames]:
+    """Validate T (4x4 rigid, tool pose in the base frame); return it, T6 = inv(base) T
+    inv(tool) as nested lists, and the robot's frame data."""
+    M = np.asarray(T, dtype=np.float64)
+    if M.shape != (4, 4) or not np.isfinite(M).all():
+        raise GeometryError(
+            f"robot '{robot.name}': the target pose must be a finite 4x4 matrix, got "
+            f"shape {M.shape}" + ("" if M.shape != (4, 4) else " with non-finite entries")
+        )
+    rows = M.tolist()
+    (a, b, c, _), (d, e, f, _), (g, h, i, _), last = rows
+    dev = max(
+        abs(a * a + d * d + g * g - 1.0),
+        abs(b * b + e * e + h * h - 1.0),
+        abs(c * c + f * f + i * i - 1.0),
+        abs(a * b + d * e + g * h),
+        abs(a * c + d * f + g * i),
+        abs(b * c + e * f + h * i),
+        abs(a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) - 1.0),
+    )
+    if dev > 1e-9 or max(abs(last[0]), abs(last[1]), abs(last[2]), abs(last[3] - 1.0)) > 1e-12:
+        raise GeometryError(
+            f"robot '{robot.name}': the target pose is not a rigid transform (rotation "
+            f"orthonormal with det +1 within 1e-9, off by {dev:.1e}; last row 0 0 0 1 "
+            f"within 1e-12, got {last})"
+        )
+    F = _frames(robot, P)
+    return M, rows if F.plain else (F.base_inv @ M @ F.tool_inv).tolist(), F
+
+
+@functools.cache
+def _limits_reason(ok: tuple[bool, ...]) -> str:
+    """The reason of a solution whose joints marked False have no in-limit equivalent."""
+    bad = [str(j + 1) for j, good in enumerate(ok) if not good]
+    many = len(bad) > 1
+    return (
+        f"outside joint limits: joint{'s' if many else ''} {', '.join(bad)} "
+        f"ha{'ve' if many else 's'} no 2 pi-equivalent within the limits"
+    )
+
+
+def puma_ik_report(
+    robot: Robot, T: ArrayLike, q_current: ArrayLike | None = None
+) -> tuple[list[IKSolution], str]:
+    """Every distinct closed-form solution of tool pose ``T`` and a reason when there is none.
+
+    ``T`` (4x4, rigid) is the tool pose in the robot's base-reference frame, as returned by
+    ``robot.fk``; ``q_current`` (6,) rad, optional, picks the 2 pi-representative of each
+    joint (``Robot.wrap_to_limits(q, near=q_current)``), q4 at an aligned wrist, and the
+    order. Returns ``(solutions, reason)``: up to 8 :class:`IKSolution` (see the module
+    docstring for the config letters), and ``""``, or why the list is empty ("out of
+    reach: ...") or why no solution is usable ("no solution within the joint limits").
+
+    Each solution: ``q`` the in-limit representative (nearest to ``q_current``, else to the
+    (-pi, pi] value); when a joint has no equivalent inside its limits, ``q`` is left
+    wrapped to (-pi, pi] with ``within_limits=False``, ``success=False`` and a reason naming
+    the joints. ``position_error`` (m) and ``orientation_error`` (rad) are measured by FK
+    of the returned q against T; ``success`` needs both below 1e-9. Order: within limits
+    first; then by max_i |q_i - q_current_i| (rad) when ``q_current`` is given, else in
+    ``CONFIGS`` order (lun, luf, ldn, ldf, run, ruf, rdn, rdf).
+
+    Raises KinematicsError for a robot outside the Puma family (saying which DH entries
+    differ) and GeometryError for a target that is not a finite rigid 4x4 transform.
+    """
+    P = _params(robot)
+    ref = _reference(robot, q_current)
+    M, T6, F = _pose(robot, P, T)
+    branches, maybe_dup, reason = _solve_one(P, T6, ref)
+    if not branches:
+        return [], reason
+    Q = _wrap_pi(np.array([b[1] for b in branches]) - P.offset)
+    if maybe_dup:
+        keep = _distinct(Q)
+        branches = [b for b, k in zip(branches, keep, strict=True) if k]
+        Q = Q[keep]
+    Qw, ok = _wrap_to_limits(P, Q, ref)
+    sq = _fk_squared_errors(F, P, Qw, M)
+    okl = ok.tolist()
+    inside = [all(row) for row in okl]
+    m = len(branches)
+    if ref is None:
+        order = sorted(range(m), key=lambda i: (not inside[i], branches[i][0]))
+    else:
+        dist = np.abs(Qw - ref)
+        far, total = dist.max(axis=1).tolist(), dist.sum(axis=1).tolist()
+        order = sorted(range(m), key=lambda i: (not inside[i], far[i], total[i], branches[i][0]))
+    sols = []
+    for i in order:
+        slot, _, singular = branches[i]
+        e = sq[i]  # squared column distances (x, y, z axes; position) of FK(q) and T
+        dp = math.sqrt(e[3])
+        dr = 2.0 * math.asin(min(1.0, math.sqrt((e[0] + e[1] + e[2]) / 8.0)))  # |dR|_F rule
+        if not inside[i]:
+            why = _limits_reason(tuple(okl[i]))
+        elif dp > EXACT_TOL or dr > EXACT_TOL:
+            why = f"pose not reached exactly: errors {dp:.1e} m, {dr:.1e} rad"
+        else:
+            why = ""
+        sols.append(
+            IKSolution(
+                q=Qw[i],
+                success=not why,
+                config=CONFIGS[slot],
+                within_limits=inside[i],
+                singular=singular,
+                position_error=dp,
+                orientation_error=dr,
+                iterations=0,
+                reason=why,
+                method="closed-form",
+            )
+        )
+    if not any(inside):
+        reason = f"no solution within the joint limits ({m} found outside them)"
+    return sols, reason
+
+
+def puma_ik(robot: Robot, T: ArrayLike, q_current: ArrayLike | None = None) -> list[IKSolution]:
+    """Every distinct closed-form solution of tool pose ``T`` (Puma family), up to 8.
+
+    An empty list when the pose is out of reach (:func:`puma_ik_report` says why). See
+    :func:`puma_ik_report` for the fields, limits handling and order.
+    """
+    return puma_ik_report(robot, T, q_current)[0]
+
+
+def puma_config(robot: Robot, q: ArrayLike) -> str:
+    """Configuration letters (arm l|r, elbow u|d, wrist n|f) of joint vector q (rad).
+
+    The letters of the module docstring, computed from the DH angles theta = q + offset:
+    in the arm plane the elbow is e = a2 (c2, s2) and the wrist centre
+    w = e + a3 (c23, s23) + d4 (-s23, c23); ``r`` when w_x >= 0; ``u`` when the elbow is
+    on the upper side of the shoulder-wrist line (w_x e_y - w_y e_x >= 0 for a right arm,
+    <= 0 for a left one); ``f`` when sin(theta5) > 0. On a boundary (w_x = 0, the elbow on
+    the line, sin(theta5) = 0) both letters describe q; :func:`puma_ik` reports the first
+    in ``CONFIGS`` order.
+    """
+    P = _params(robot)
+    v = np.asarray(q, dtype=np.float64)
+    if v.shape != (6,) or not np.all(np.isfinite(v)):
+        raise KinematicsError(
+            f"robot '{robot.name}': q must be 6 finite joint values (rad), got {q!r}"
+        )
+    t = (v + P.offset).tolist()
+    t2, t23 = t[1], t[1] + t[2]
+    ex, ey = P.a2 * math.cos(t2), P.a2 * math.sin(t2)
+    wx = ex + P.a3 * math.cos(t23) - P.d4 * math.sin(t23)
+    wy = ey + P.a3 * math.sin(t23) + P.d4 * math.cos(t23)
+    right = wx >= 0.0
+    cross = wx * ey - wy * ex
+    up = cross >= 0.0 if right else cross <= 0.0
+    return ("r" if right else "l") + ("u" if up else "d") + ("f" if math.sin(t[4]) > 0 else "n")
+
+
+# ---------------------------------------------------------------- the batched solver
+def puma_ik_batch(
+    robot: Robot, Ts: ArrayLike, q_current: ArrayLike | None = None
+) -> tuple[Array, NDArray[np.bool_]]:
+    """All closed-form solutions of N tool poses at once, vectorised over the poses.
+
+    ``Ts`` (N, 4, 4) rigid tool poses in the base-reference frame (a single 4x4 counts as
+    N = 1); ``q_current`` (6,) or (N, 6) rad, optional, as in :func:`puma_ik_report`.
+    Returns ``Q`` (N, 8, 6) rad and ``valid`` (N, 8) bool; slot k holds configuration
+    ``CONFIGS[k]`` (lun, luf, ldn, ldf, run, ruf, rdn, rdf). ``Q[n, k]`` is NaN when slot k
+    is not a distinct solution of pose n (pose out of reach; the flip twin at an aligned
+    wrist; a branch that coincides with an earlier slot); otherwise the in-limit
+    representative (nearest to ``q_current``, else to the (-pi, pi] value), or the
+    (-pi, pi] value when some joint has no equivalent within its limits.
+    ``valid[n, k]`` is True for the in-limit solutions. The non-NaN slots are exactly the
+    solutions of :func:`puma_ik` (same q, same config); there is no FK check and no
+    singular flag here. Raises GeometryError for poses that are not rigid transforms.
+    """
+    P = _params(robot)
+    T = spatial.as_transforms(Ts, rigid=True, what=f"robot '{robot.name}' target poses")
+    if T.ndim == 2:
+        T = T[None]
+    N = T.shape[0]
+    ref = None
+    if q_current is not None:
+        ref = np.asarray(q_current, dtype=np.float64)
+        if ref.shape not in ((6,), (N, 6)) or not np.all(np.isfinite(ref)):
+            raise KinematicsError(
+                f"robot '{robot.name}': q_current must be (6,) or ({N}, 6) finite rad, "
+                f"got shape {ref.shape}"
+            )
+        ref = np.broadcast_to(ref, (N, 6))
+    F = _frames(robot, P)
+    T6 = F.base_inv @ T @ F.tool_inv
+    R = T6[:, :3, :3]
+    px, py = T6[:, 0, 3], T6[:, 1, 3]
+    z = T6[:, 2, 3] - P.d1
+    a2, L, d3 = P.a2, P.L, P.d3
+
+    r2 = px * px + py * py
+    r = np.sqrt(r2)
+    hr2 = r2 - d3 * d3
+    hr = np.sqrt(np.maximum(hr2, 0.0))
+    rho2 = np.maximum(hr2, 0.0) + z * z
+    rho = np.sqrt(rho2)
+    reach = (r >= abs(d3) - REACH_TOL) & (rho <= a2 + L + REACH_TOL)
+    reach &= rho >= abs(a2 - L) - REACH_TOL
+    shoulder_free = r < REACH_TOL
+    ref1 = P.offset[0] + (0.0 if ref is None else ref[:, 0])
+    phi = np.where(shoulder_free, ref1, np.arctan2(py, px))
+    delta = np.arctan2(d3, hr)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cpsi = np.where(rho > 0.0, (a2 * a2 + rho2 - L * L) / (2.0 * a2 * rho), 0.0)
+    psi = np.arccos(np.clip(cpsi, -1.0, 1.0))
+
+    # (arm, elbow) pairs in CONFIGS order: lu, ld, ru, rd -> arrays (N, 4)
+    right = np.array([False, False, True, True])
+    up = np.array([True, False, True, False])
+    t1 = np.where(right, phi[:, None] + delta[:, None], (phi + _PI - delta)[:, None])
+    h = np.where(right, hr[:, None], -hr[:, None])
+    beta = np.arctan2(z[:, None], h)
+    t2 = beta + np.where(up == right, 1.0, -1.0) * psi[:, None]
+    zz = z[:, None]
+    t23 = np.arctan2(zz - a2 * np.sin(t2), h - a2 * np.cos(t2)) - P.gamma
+    c1, s1, c23, s23 = np.cos(t1), np.sin(t1), np.cos(t23), np.sin(t23)
+
+    def cols(v: Array) -> tuple[Array, Array, Array]:
+        """Components of the column v (N, 3) of R06 in frame 3 (x3, y3, z3), each (N, 4)."""
+        vx, vy, vz = v[:, 0, None], v[:, 1, None], v[:, 2, None]
+        u1 = c1 * vx + s1 * vy
+        return c23 * u1 + s23 * vz, c1 * vy - s1 * vx, c23 * vz - s23 * u1
+
+    m02, m12, m22 = cols(R[:, :, 2])
+    m00, m10, m20 = cols(R[:, :, 0])
+    s5abs = np.hypot(m02, m12)
+    aligned = s5abs < ALIGNED_TOL
+    ref4 = P.offset[3] + (0.0 if ref is None else ref[:, 3, None])
+    t4 = np.where(aligned, ref4, np.arctan2(m12, m02))
+    t5 = np.where(aligned, np.where(m22 > 0.0, 0.0, _PI), np.arctan2(-s5abs, m22))
+    c4, s4, c5, s5 = np.cos(t4), np.sin(t4), np.cos(t5), np.sin(t5)
+    t6 = np.arctan2(-s4 * m00 + c4 * m10, c5 * (c4 * m00 + s4 * m10) + s5 * m20)
+
+    th = np.empty((N, 4, 2, 6))
+    th[..., 0] = t1[..., None]
+    th[..., 1] = t2[..., None]
+    th[..., 2] = (t23 - t2)[..., None]
+    th[..., 0, 3], th[..., 0, 4], th[..., 0, 5] = t4, t5, t6
+    th[..., 1, 3], th[..., 1, 4], th[..., 1, 5] = t4 + _PI, -t5, t6 + _PI
+    Q = _wrap_pi(th.reshape(N, 8, 6) - P.offset)
+
+    exists = np.repeat(reach[:, None], 8, axis=1)
+    exists[:, 1::2] &= ~aligned
+    degenerate = reach & (
+        (hr < _DEGENERATE * np.maximum(r, 1e-300))
+        | (np.minimum(psi, _PI - psi) < _DEGENERATE)
+        | shoulder_free
+    )
+    for n in np.flatnonzero(degenerate):
+        idx = np.flatnonzero(exists[n])
+        exists[n, idx[~_distinct(Q[n, idx])]] = False
+
+    Qw, ok = _wrap_to_limits(P, Q, None if ref is None else ref[:, None, :])
+    Qw[~exists] = np.nan
+    return Qw, exists & ok.all(axis=-1)
