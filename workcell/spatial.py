@@ -14,6 +14,7 @@ and :func:`srt` use exact 0/+-1 entries, so e.g. the unit cube's faces land exac
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -265,6 +266,9 @@ def as_transforms(transforms: ArrayLike, *, rigid: bool = False, what: str = "tr
     single = A.ndim == 2
     if single and A.shape == (3, 4):
         A = np.vstack([A, _LAST_ROW])
+    if A.shape == (4, 4) and _valid_single(A.tolist(), rigid):  # the common case, in floats
+        A[3] = _LAST_ROW
+        return A
     if single:
         A = A[None]
     if A.ndim != 3 or A.shape[1:] != (4, 4):
@@ -293,6 +297,30 @@ def as_transforms(transforms: ArrayLike, *, rigid: bool = False, what: str = "tr
         if (np.abs(det - 1.0) > 1e-9).any():
             fail(np.abs(det - 1.0) > 1e-9, lambda i: f"is not rigid: det(R) = {det[i]:.6g}, not +1")
     return A[0] if single else A
+
+
+def _valid_single(rows: list[list[float]], rigid: bool) -> bool:
+    """Fast check of one 4x4 (nested lists) against :func:`as_transforms`' rules; False
+    sends it to the vectorised path, which says what is wrong."""
+    (a, b, c, _), (d, e, f, _), (g, h, i, _), last = rows
+    if not all(math.isfinite(x) for row in rows for x in row):
+        return False
+    if max(abs(last[0]), abs(last[1]), abs(last[2]), abs(last[3] - 1.0)) > 1e-12:
+        return False
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    if abs(det) <= 1e-12:
+        return False
+    if not rigid:
+        return True
+    dev = max(
+        abs(a * a + d * d + g * g - 1.0),
+        abs(b * b + e * e + h * h - 1.0),
+        abs(c * c + f * f + i * i - 1.0),
+        abs(a * b + d * e + g * h),
+        abs(a * c + d * f + g * i),
+        abs(b * c + e * f + h * i),
+    )
+    return dev <= 1e-9 and abs(det - 1.0) <= 1e-9
 
 
 def as_transform(matrix: ArrayLike, *, rigid: bool = False, name: str = "transform") -> Array:

@@ -19,10 +19,9 @@ from scipy.spatial.transform import Rotation
 
 from workcell import spatial
 from workcell.errors import KinematicsError, UnreachableError
-from workcell.robots import Joint, Robot, ik_numeric, puma260, puma560
+from workcell.robots import Joint, Robot, ik_closed, ik_numeric, puma260, puma560
 
 TOL_P, TOL_O = 1e-6, 1e-6
-ik_closed = pytest.importorskip("workcell.robots.ik_closed")
 
 
 # ----------------------------------------------------------------------------- robots
@@ -207,15 +206,6 @@ def test_position_gradient_and_hessian_match_finite_differences():
             np.testing.assert_allclose(H, fd_hess, atol=2e-5)
 
 
-def test_puma_config_matches_closed_form_letters():
-    for name in ("puma560", "puma260", "puma_placed"):
-        r = robot_named(name)
-        _, Ts = random_targets(r, 100, 6)
-        for T in Ts:
-            for s in ik_closed.puma_ik(r, T):
-                assert ik_numeric.puma_config(r, s.q) == s.config
-
-
 # ------------------------------------------------------------------------------ mink
 @pytest.mark.parametrize("name", list(ROBOTS))
 def test_mink_reaches_random_full_range_targets(name):
@@ -226,7 +216,7 @@ def test_mink_reaches_random_full_range_targets(name):
         assert_solution(r, sol, T)
         assert sol.method == "mink"
         if r.family == "puma":
-            assert sol.config == ik_numeric.puma_config(r, sol.q)
+            assert sol.config == ik_closed.puma_config(r, sol.q)
 
 
 @given(q=st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6))

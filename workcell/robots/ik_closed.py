@@ -112,30 +112,12 @@ class _Puma:
     L: float  # forearm length sqrt(a3^2 + d4^2), m
     gamma: float  # atan2(d4, a3), rad
     offset: Array  # (6,) rad
-    lo: Array  # (6,) rad
-    hi: Array  # (6,) rad
-    cos_sin: Array  # (6, 2): offset - (0, pi/2), so cos(q + cos_sin) = (cos, sin) of theta
-    lo_turns: Array  # lo / 2 pi - 1e-12 (the slack of Robot.wrap_to_limits), turns
-    hi_turns: Array  # hi / 2 pi + 1e-12, turns
-    C0: Array  # (6, 4, 4): A_i(theta) = C0 + cos(theta) Cc + sin(theta) Cs
-    Ccs: Array  # (6, 2, 16): Cc and Cs, flattened
-
-
-@dataclass(frozen=True)
-class _Frames:
-    """inv(base), inv(tool) and the DH terms with base and tool folded into links 1 and 6."""
-
-    key: bytes  # base and tool contents
-    params: _Puma  # the joint parameters the folded terms were made from
     plain: bool  # base and tool are both the identity
-    base_inv: Array
-    tool_inv: Array
-    C0: Array  # (6, 1, 16)
-    Ccs: Array  # (6, 2, 16)
+    base_inv: Array  # (4, 4)
+    tool_inv: Array  # (4, 4)
 
 
-_CACHE: weakref.WeakKeyDictionary[Robot, tuple[object, _Puma]] = weakref.WeakKeyDictionary()
-_FRAMES: weakref.WeakKeyDictionary[Robot, _Frames] = weakref.WeakKeyDictionary()
+_CACHE: weakref.WeakKeyDictionary[Robot, _Puma] = weakref.WeakKeyDictionary()
 
 
 def _check_structure(robot: Robot) -> _Puma:
@@ -166,17 +148,6 @@ def _check_structure(robot: Robot) -> _Puma:
             f"{where} (standard DH, alpha = (90, 0, -90, 90, -90, 0) deg, a1 = d2 = 0, "
             f"spherical wrist a4 = a5 = a6 = d5 = d6 = 0): " + "; ".join(bad)
         )
-    a = np.array([j.a for j in J])
-    d = np.array([j.d for j in J])
-    ca, sa = np.cos(_ALPHA), np.sin(_ALPHA)
-    ca[np.abs(ca) < 1e-15] = 0.0
-    C0 = np.zeros((6, 4, 4))
-    C0[:, 2, 1], C0[:, 2, 2], C0[:, 2, 3], C0[:, 3, 3] = sa, ca, d, 1.0
-    Cc = np.zeros((6, 4, 4))
-    Cc[:, 0, 0], Cc[:, 0, 3], Cc[:, 1, 1], Cc[:, 1, 2] = 1.0, a, ca, -sa
-    Cs = np.zeros((6, 4, 4))
-    Cs[:, 0, 1], Cs[:, 0, 2], Cs[:, 1, 0], Cs[:, 1, 3] = -ca, sa, 1.0, a
-    lo, hi = robot.lower, robot.upper
     offset = np.array([j.offset for j in J])
     return _Puma(
         a2=float(a2),
@@ -187,56 +158,20 @@ def _check_structure(robot: Robot) -> _Puma:
         L=L,
         gamma=math.atan2(d4, a3),
         offset=offset,
-        lo=lo,
-        hi=hi,
-        cos_sin=offset[:, None] - np.array([0.0, 0.5 * math.pi]),
-        lo_turns=lo / _TWO_PI - 1e-12,
-        hi_turns=hi / _TWO_PI + 1e-12,
-        C0=C0,
-        Ccs=np.stack([Cc, Cs], axis=1).reshape(6, 2, 16),
+        plain=bool((robot.base == np.eye(4)).all() and (robot.tool == np.eye(4)).all()),
+        base_inv=spatial.invert(robot.base),
+        tool_inv=spatial.invert(robot.tool),
     )
 
 
 def _params(robot: Robot) -> _Puma:
-    """The robot's Puma parameters (validated once per joints tuple)."""
+    """The robot's Puma parameters (validated once per robot: robots are immutable)."""
     if not isinstance(robot, Robot):
         raise KinematicsError(f"puma_ik needs a Robot, got {type(robot).__name__}")
-    hit = _CACHE.get(robot)
-    if hit is not None and hit[0] is robot.joints:
-        return hit[1]
-    P = _check_structure(robot)
-    _CACHE[robot] = (robot.joints, P)
+    P = _CACHE.get(robot)
+    if P is None:
+        P = _CACHE[robot] = _check_structure(robot)
     return P
-
-
-def _rigid_inverse(T: Array) -> Array:
-    Ti = np.eye(4)
-    Ti[:3, :3] = T[:3, :3].T
-    Ti[:3, 3] = -T[:3, :3].T @ T[:3, 3]
-    return Ti
-
-
-def _frames(robot: Robot, P: _Puma) -> _Frames:
-    """The robot's base/tool data, cached on their contents."""
-    key = robot.base.tobytes() + robot.tool.tobytes()
-    hit = _FRAMES.get(robot)
-    if hit is not None and hit.params is P and hit.key == key:
-        return hit
-    C0 = P.C0.copy()
-    Ccs = P.Ccs.reshape(6, 2, 4, 4).copy()
-    C0[0], Ccs[0] = robot.base @ C0[0], robot.base @ Ccs[0]
-    C0[5], Ccs[5] = C0[5] @ robot.tool, Ccs[5] @ robot.tool
-    F = _Frames(
-        key=key,
-        params=P,
-        plain=bool((robot.base == np.eye(4)).all() and (robot.tool == np.eye(4)).all()),
-        base_inv=_rigid_inverse(robot.base),
-        tool_inv=_rigid_inverse(robot.tool),
-        C0=C0.reshape(6, 1, 16),
-        Ccs=Ccs.reshape(6, 2, 16),
-    )
-    _FRAMES[robot] = F
-    return F
 
 
 def _reference(robot: Robot, q_current: ArrayLike | None) -> Array | None:
@@ -253,22 +188,6 @@ def _reference(robot: Robot, q_current: ArrayLike | None) -> Array | None:
 def _wrap_pi(q: Array) -> Array:
     """Angles wrapped to (-pi, pi] (rad)."""
     return _PI - np.mod(_PI - q, _TWO_PI)
-
-
-def _wrap_to_limits(P: _Puma, Q: Array, ref: Array | None) -> tuple[Array, NDArray[np.bool_]]:
-    """Vectorised ``Robot.wrap_to_limits``: the 2 pi-equivalent of each Q[..., j] inside
-    [lo_j, hi_j] nearest to ref[..., j] (to Q itself when ref is None); returns (the
-    wrapped vectors, Q itself where some joint has no equivalent, and ok per joint)."""
-    turns = Q * (1.0 / _TWO_PI)
-    k_lo = np.ceil(P.lo_turns - turns)
-    k_hi = np.floor(P.hi_turns - turns)
-    if ref is None:
-        k = np.minimum(np.maximum(k_lo, 0.0), k_hi)
-    else:
-        k = np.minimum(np.maximum(np.rint(ref * (1.0 / _TWO_PI) - turns), k_lo), k_hi)
-    Qw = np.minimum(np.maximum(Q + _TWO_PI * k, P.lo), P.hi)
-    ok = k_lo <= k_hi
-    return np.where(ok.all(axis=-1, keepdims=True), Qw, Q), ok
 
 
 def _distinct(Q: Array) -> NDArray[np.bool_]:
@@ -368,45 +287,21 @@ def _solve_one(
     return out, maybe_dup or shoulder_free, ""
 
 
-def _fk_squared_errors(F: _Frames, P: _Puma, Q: Array, T: Array) -> list[list[float]]:
+def _fk_squared_errors(robot: Robot, Q: Array, T: Array) -> list[list[float]]:
     """For each Q[i] (rad), the squared distances between the columns of FK(Q[i]) (tool in
     the base frame) and of T: x, y, z axes and position (m^2). The rotation angle between
     the two is 2 asin(|R1 - R2|_F / sqrt(8)), accurate for small angles."""
-    cs = np.cos(Q[..., None] + P.cos_sin)  # (m, 6, 2): cos, sin of theta = q + offset
-    A = (cs[:, :, None, :] @ F.Ccs + F.C0).reshape(-1, 6, 4, 4)
-    B = A[:, 0::2] @ A[:, 1::2]
-    D = (B[:, 0] @ B[:, 1] @ B[:, 2])[:, :3, :] - T[:3, :]
+    D = robot._fk_unchecked(Q)[:, :3, :] - T[:3, :]  # Q is the solver's own, finite
     return (D * D).sum(axis=1).tolist()
 
 
-def _pose(robot: Robot, P: _Puma, T: ArrayLike) -> tuple[Array, list[list[float]], _Frames]:
-    """Validate T (4x4 rigid, tool pose in the base frame); return it, T6 = inv(base) T
-    inv(tool) as nested lists, and the robot's frame data."""
-    M = np.asarray(T, dtype=np.float64)
-    if M.shape != (4, 4) or not np.isfinite(M).all():
-        raise GeometryError(
-            f"robot '{robot.name}': the target pose must be a finite 4x4 matrix, got "
-            f"shape {M.shape}" + ("" if M.shape != (4, 4) else " with non-finite entries")
-        )
-    rows = M.tolist()
-    (a, b, c, _), (d, e, f, _), (g, h, i, _), last = rows
-    dev = max(
-        abs(a * a + d * d + g * g - 1.0),
-        abs(b * b + e * e + h * h - 1.0),
-        abs(c * c + f * f + i * i - 1.0),
-        abs(a * b + d * e + g * h),
-        abs(a * c + d * f + g * i),
-        abs(b * c + e * f + h * i),
-        abs(a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) - 1.0),
-    )
-    if dev > 1e-9 or max(abs(last[0]), abs(last[1]), abs(last[2]), abs(last[3] - 1.0)) > 1e-12:
-        raise GeometryError(
-            f"robot '{robot.name}': the target pose is not a rigid transform (rotation "
-            f"orthonormal with det +1 within 1e-9, off by {dev:.1e}; last row 0 0 0 1 "
-            f"within 1e-12, got {last})"
-        )
-    F = _frames(robot, P)
-    return M, rows if F.plain else (F.base_inv @ M @ F.tool_inv).tolist(), F
+def _pose(robot: Robot, P: _Puma, T: ArrayLike) -> tuple[Array, list[list[float]]]:
+    """Validate T (4x4 rigid, tool pose in the base frame); return it and T6 = inv(base) T
+    inv(tool) (the flange pose in frame 0) as nested lists."""
+    M = spatial.as_transforms(T, rigid=True, what=f"robot '{robot.name}': the target pose")
+    if M.shape != (4, 4):
+        raise GeometryError(f"robot '{robot.name}': the target pose must be one 4x4 matrix")
+    return M, (M if P.plain else P.base_inv @ M @ P.tool_inv).tolist()
 
 
 @functools.cache
@@ -445,7 +340,7 @@ def puma_ik_report(
     """
     P = _params(robot)
     ref = _reference(robot, q_current)
-    M, T6, F = _pose(robot, P, T)
+    M, T6 = _pose(robot, P, T)
     branches, maybe_dup, reason = _solve_one(P, T6, ref)
     if not branches:
         return [], reason
@@ -454,8 +349,9 @@ def puma_ik_report(
         keep = _distinct(Q)
         branches = [b for b, k in zip(branches, keep, strict=True) if k]
         Q = Q[keep]
-    Qw, ok = _wrap_to_limits(P, Q, ref)
-    sq = _fk_squared_errors(F, P, Qw, M)
+    W, ok = robot.wrap_batch(Q, ref)
+    Qw = np.where(ok.all(axis=-1, keepdims=True), W, Q)
+    sq = _fk_squared_errors(robot, Qw, M)
     okl = ok.tolist()
     inside = [all(row) for row in okl]
     m = len(branches)
@@ -565,8 +461,7 @@ def puma_ik_batch(
                 f"got shape {ref.shape}"
             )
         ref = np.broadcast_to(ref, (N, 6))
-    F = _frames(robot, P)
-    T6 = F.base_inv @ T @ F.tool_inv
+    T6 = P.base_inv @ T @ P.tool_inv
     R = T6[:, :3, :3]
     px, py = T6[:, 0, 3], T6[:, 1, 3]
     z = T6[:, 2, 3] - P.d1
@@ -634,6 +529,7 @@ def puma_ik_batch(
         idx = np.flatnonzero(exists[n])
         exists[n, idx[~_distinct(Q[n, idx])]] = False
 
-    Qw, ok = _wrap_to_limits(P, Q, None if ref is None else ref[:, None, :])
+    W, ok = robot.wrap_batch(Q, None if ref is None else ref[:, None, :])
+    Qw = np.where(ok.all(axis=-1, keepdims=True), W, Q)
     Qw[~exists] = np.nan
     return Qw, exists & ok.all(axis=-1)

@@ -46,11 +46,10 @@ limits; Newton-Gauss start candidates) are built once per robot object and reuse
 
 from __future__ import annotations
 
-import importlib
 import math
 import threading
 import weakref
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -61,6 +60,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from workcell.errors import GeometryError, KinematicsError
+from workcell.robots.ik_closed import puma_config, puma_ik
 from workcell.robots.mjcf import TOOL_SITE, kinematic_model
 from workcell.robots.robot import IKSolution, Robot
 from workcell.spatial import as_transform
@@ -142,46 +142,6 @@ def _reach_gap(robot: Robot, T_target: Array) -> float:
     return float(np.linalg.norm(p)) - max_reach(robot)
 
 
-def puma_config(robot: Robot, q: ArrayLike) -> str:
-    """Configuration letters of joint vector q of a Puma-family robot: arm, elbow, wrist.
-
-    Delegates to ``workcell.robots.ik_closed.puma_config`` when that module provides one.
-    Otherwise computed here with the definitions of ``workcell.robots.ik_closed`` (after
-    P. Corke's Robotics Toolbox ``ikine6s``), geometrically in the vertical arm plane of
-    joint 1 (shoulder = origin of frame 1, elbow = origin of frame 2, wrist centre =
-    origin of frame 4, from ``robot.link_frames``):
-
-    - arm ``r`` (right) when the wrist centre lies on the +x1 side of the joint 1 axis,
-      ``l`` (left) otherwise;
-    - elbow ``u`` (up) when the elbow lies above (+z of frame 0) the shoulder-wrist line,
-      ``d`` below;
-    - wrist ``n`` (no flip) when sin(theta5) <= 0, ``f`` (flip) when sin(theta5) > 0
-      (theta5 = q5 + offset5); the flipped twin is (theta4 + pi, -theta5, theta6 + pi).
-    """
-    closed = _closed_form_module()
-    fn = getattr(closed, "puma_config", None) if closed is not None else None
-    if fn is not None:
-        return str(fn(robot, q))
-    return _puma_config_geometric(robot, q)
-
-
-def _puma_config_geometric(robot: Robot, q: ArrayLike) -> str:
-    F = robot.link_frames(q)
-    x1 = F[1][:3, 0]  # horizontal direction of the arm plane (joint 2 turns about z1)
-    up = F[0][:3, 2]  # base z
-    s, e, w = F[1][:3, 3], F[2][:3, 3], F[4][:3, 3]
-    radial = float(np.dot(w - s, x1))
-    arm = "r" if radial >= 0 else "l"
-    # 2-D cross product in the (x1, up) plane of (w - s) and (e - s)
-    ws = np.array([np.dot(w - s, x1), np.dot(w - s, up)])
-    es = np.array([np.dot(e - s, x1), np.dot(e - s, up)])
-    cross = ws[0] * es[1] - ws[1] * es[0]
-    elbow = "u" if cross * (1.0 if radial >= 0 else -1.0) >= 0 else "d"
-    theta5 = float(np.asarray(q)[4]) + robot.joints[4].offset
-    wrist = "n" if math.sin(theta5) <= 0 else "f"
-    return arm + elbow + wrist
-
-
 def _check_config(robot: Robot, config: str | None) -> str | None:
     if config is None:
         return None
@@ -200,21 +160,6 @@ def _check_config(robot: Robot, config: str | None) -> str | None:
     return c
 
 
-_CLOSED_MODULE: list[object] = []
-
-
-def _closed_form_module() -> object | None:
-    """``workcell.robots.ik_closed`` if it exists (imported lazily; None otherwise)."""
-    if _CLOSED_MODULE:
-        return _CLOSED_MODULE[0]
-    try:
-        mod = importlib.import_module("workcell.robots.ik_closed")
-    except ImportError:
-        return None  # not cached: the module may appear later in a development tree
-    _CLOSED_MODULE.append(mod)
-    return mod
-
-
 def _closed_form_seeds(
     robot: Robot, T_target: Array, q_near: Array
 ) -> tuple[list[tuple[Array, str | None]], bool] | None:
@@ -225,10 +170,6 @@ def _closed_form_seeds(
     solver is available for this robot.
     """
     if robot.family != "puma":
-        return None
-    mod = _closed_form_module()
-    puma_ik: Callable[..., Sequence[IKSolution]] | None = getattr(mod, "puma_ik", None)
-    if puma_ik is None:
         return None
     try:
         sols = list(puma_ik(robot, T_target, q_near))
@@ -279,11 +220,6 @@ def _at_limits(robot: Robot, q: Array) -> list[str]:
     return [robot.joints[i].name for i in np.flatnonzero(near)]
 
 
-def _robot_key(robot: Robot) -> tuple[object, ...]:
-    """What the caches depend on: joints (frozen, hashable), convention, base and tool."""
-    return (robot.joints, robot.convention, robot.base.tobytes(), robot.tool.tobytes())
-
-
 def _length_scale(robot: Robot) -> float:
     """Characteristic length (m) to weigh orientation against position: half the reach bound."""
     return max(0.5 * max_reach(robot), 1e-3)
@@ -313,7 +249,6 @@ class MinkContext:
     ``[ConfigurationLimit]``; ``lock`` serialises solves (the Configuration is shared).
     """
 
-    key: tuple[object, ...]
     model: mujoco.MjModel
     configuration: mink.Configuration
     task: mink.FrameTask
@@ -328,9 +263,8 @@ _MINK_CACHE: weakref.WeakKeyDictionary[Robot, MinkContext] = weakref.WeakKeyDict
 
 def mink_context(robot: Robot) -> MinkContext:
     """The cached :class:`MinkContext` of ``robot`` (rebuilt only if its kinematics changed)."""
-    key = _robot_key(robot)
     ctx = _MINK_CACHE.get(robot)
-    if ctx is not None and ctx.key == key:
+    if ctx is not None:
         return ctx
     model = kinematic_model(robot)
     if model.nq != robot.dof or model.nv != robot.dof:
@@ -343,7 +277,6 @@ def mink_context(robot: Robot) -> MinkContext:
     )
     site_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, TOOL_SITE)
     ctx = MinkContext(
-        key=key,
         model=model,
         configuration=cfg,
         task=task,
@@ -513,16 +446,17 @@ def position_gradient_hessian(
     Jacobian column, z_a joint a's axis.
     """
     q = np.asarray(q, dtype=np.float64)
-    return _position_objective(_chain(robot), q, np.asarray(p_target, dtype=np.float64))
+    return _position_objective(robot, q, np.asarray(p_target, dtype=np.float64))
 
 
-def _position_objective(chain: _Chain, q: Array, p_t: Array) -> tuple[float, Array, Array]:
-    T, J, z = chain.pose_jacobian_axes(q)
+def _position_objective(chain: Robot, q: Array, p_t: Array) -> tuple[float, Array, Array]:
+    T, J = chain.pose_jacobian(q)
+    z = np.where(chain.revolute[:, None], J[3:].T, J[:3].T)  # joint axes (n, 3)
     Jv = J[:3]
     e = T[:3, 3] - p_t
     ez = np.cross(e, z)  # (n, 3): e x z_a, so (e x z_a) . J_b = e . (z_a x J_b)
     C = ez @ Jv  # C[a, b] = e . (z_a x J_b)
-    C[~chain.revolute_mask, :] = 0.0
+    C[~chain.revolute, :] = 0.0
     upper = np.triu(C)
     H = Jv.T @ Jv + upper + np.triu(upper, 1).T
     return 0.5 * float(e @ e), Jv.T @ e, H
@@ -541,7 +475,7 @@ def _closest_position(robot: Robot, attempts: Sequence[_Attempt], T_target: Arra
     dominates. Several starts guard against a local minimum against a joint limit.
     """
     p_t = T_target[:3, 3]
-    chain = _chain(robot)
+    chain = robot
     lo, hi = robot.lower, robot.upper
     eye = np.eye(robot.dof)
     found = list(attempts)
@@ -661,7 +595,6 @@ class NewtonGaussContext:
     configurations sorted by the condition number of their weighted Jacobian (smallest
     first) and their configuration letters (Puma family) or None."""
 
-    key: tuple[object, ...]
     starts: list[tuple[Array, float, str | None]]  # (q, condition number, config)
     length: float
 
@@ -678,96 +611,13 @@ NG_LM = 1e-3  # adaptive LM damping: lambda = NG_LM * |f|^2 + 1e-12
 NG_MAX_STEP = 0.5  # rad: the largest joint change in one iteration
 
 
-class _Chain:
-    """The robot's kinematic chain with parameters unpacked once, for fast single-q
-    evaluation of the tool pose and geometric Jacobian (the same formulas as
-    :meth:`Robot.fk` and :meth:`Robot.jacobian`, without their per-call validation)."""
-
-    def __init__(self, robot: Robot) -> None:
-        j = robot.joints
-        self.n = robot.dof
-        self.a = np.array([x.a for x in j])
-        self.d = np.array([x.d for x in j])
-        self.theta = np.array([x.theta for x in j])
-        self.offset = np.array([x.offset for x in j])
-        alpha = np.array([x.alpha for x in j])
-        self.ca, self.sa = np.cos(alpha), np.sin(alpha)
-        self.prismatic = np.array([x.kind == "prismatic" for x in j])
-        self.any_prismatic = bool(self.prismatic.any())
-        self.revolute_mask = ~self.prismatic
-        self.standard = robot.convention == "standard"
-        self.base, self.tool = robot.base.copy(), robot.tool.copy()
-
-    def pose_jacobian(self, q: Array) -> tuple[Array, Array]:
-        """Tool pose (4, 4) and geometric Jacobian (6, n), rows v (m/s) then w (rad/s)."""
-        T, J, _ = self.pose_jacobian_axes(q)
-        return T, J
-
-    def pose_jacobian_axes(self, q: Array) -> tuple[Array, Array, Array]:
-        """Tool pose, geometric Jacobian and the joint axes z_i (n, 3), unit vectors."""
-        n = self.n
-        if self.any_prismatic:
-            th = np.where(self.prismatic, self.theta, q + self.offset)
-            d = np.where(self.prismatic, q + self.offset, self.d)
-        else:
-            th, d = q + self.offset, self.d
-        ct, st = np.cos(th), np.sin(th)
-        ca, sa, a = self.ca, self.sa, self.a
-        A = np.zeros((n, 4, 4))
-        if self.standard:
-            A[:, 0, 0], A[:, 0, 1], A[:, 0, 2], A[:, 0, 3] = ct, -st * ca, st * sa, a * ct
-            A[:, 1, 0], A[:, 1, 1], A[:, 1, 2], A[:, 1, 3] = st, ct * ca, -ct * sa, a * st
-            A[:, 2, 1], A[:, 2, 2], A[:, 2, 3] = sa, ca, d
-        else:
-            A[:, 0, 0], A[:, 0, 1], A[:, 0, 3] = ct, -st, a
-            A[:, 1, 0], A[:, 1, 1], A[:, 1, 2], A[:, 1, 3] = st * ca, ct * ca, -sa, -d * sa
-            A[:, 2, 0], A[:, 2, 1], A[:, 2, 2], A[:, 2, 3] = st * sa, ct * sa, ca, d * ca
-        A[:, 3, 3] = 1.0
-        F = np.empty((n + 1, 4, 4))
-        F[0] = self.base
-        for i in range(n):
-            F[i + 1] = F[i] @ A[i]
-        T = F[n] @ self.tool
-        axes = F[:n] if self.standard else F[1:]
-        z, r = axes[:, :3, 2], T[:3, 3] - axes[:, :3, 3]
-        J = np.empty((6, n))
-        J[0] = z[:, 1] * r[:, 2] - z[:, 2] * r[:, 1]
-        J[1] = z[:, 2] * r[:, 0] - z[:, 0] * r[:, 2]
-        J[2] = z[:, 0] * r[:, 1] - z[:, 1] * r[:, 0]
-        J[3:] = z.T
-        if self.any_prismatic:
-            J[:3, self.prismatic] = z[self.prismatic].T
-            J[3:, self.prismatic] = 0.0
-        return T, J, z
-
-
-_CHAINS: weakref.WeakKeyDictionary[Robot, tuple[tuple[object, ...], _Chain]] = (
-    weakref.WeakKeyDictionary()
-)
-
-
-def _chain(robot: Robot) -> _Chain:
-    key = _robot_key(robot)
-    hit = _CHAINS.get(robot)
-    if hit is not None and hit[0] == key:
-        return hit[1]
-    c = _Chain(robot)
-    _CHAINS[robot] = (key, c)
-    return c
-
-
-def _frames_pose_jacobian(robot: Robot, q: Array) -> tuple[Array, Array]:
-    """Tool pose (4, 4) and geometric Jacobian (6, n) of ``robot`` at q (cached chain)."""
-    return _chain(robot).pose_jacobian(np.asarray(q, dtype=np.float64))
-
-
 def _vect(M: Array) -> Array:
     """Vector invariant 1/2 (m32 - m23, m13 - m31, m21 - m12) of a 3x3 matrix."""
     return 0.5 * np.array([M[2, 1] - M[1, 2], M[0, 2] - M[2, 0], M[1, 0] - M[0, 1]])
 
 
 def _ng_equations(
-    chain: _Chain, q: Array, T_target: Array, length: float
+    chain: Robot, q: Array, T_target: Array, length: float
 ) -> tuple[Array, Array, Array]:
     T, J = chain.pose_jacobian(q)
     E = T_target[:3, :3] @ T[:3, :3].T
@@ -777,7 +627,7 @@ def _ng_equations(
     f[:3] = (T[:3, 3] - T_target[:3, 3]) / length
     f[3:6] = v
     f[6] = 0.5 * (tr - 3.0)
-    Jf = np.empty((7, chain.n))
+    Jf = np.empty((7, chain.dof))
     Jf[:3] = J[:3] / length
     Jf[3:6] = -0.5 * (tr * np.eye(3) - E.T) @ J[3:]
     Jf[6] = v @ J[3:]
@@ -801,10 +651,10 @@ def ng_residual_jacobian(
     q = np.asarray(q, dtype=np.float64)
     if q.shape != (robot.dof,) or not np.all(np.isfinite(q)):
         raise KinematicsError(f"robot '{robot.name}': q must be {robot.dof} finite numbers")
-    return _ng_equations(_chain(robot), q, np.asarray(T_target, dtype=np.float64), length)
+    return _ng_equations(robot, q, np.asarray(T_target, dtype=np.float64), length)
 
 
-def _condition(chain: _Chain, q: Array, length: float) -> float:
+def _condition(chain: Robot, q: Array, length: float) -> float:
     _, J = chain.pose_jacobian(q)
     J[:3] /= length
     s = np.linalg.svd(J, compute_uv=False)
@@ -821,11 +671,10 @@ def newton_gauss_context(robot: Robot) -> NewtonGaussContext:
     per configuration (so every branch has a start); other robots keep
     ``NG_GENERIC_STARTS`` mutually distant ones.
     """
-    key = _robot_key(robot)
     ctx = _NG_CACHE.get(robot)
-    if ctx is not None and ctx.key == key:
+    if ctx is not None:
         return ctx
-    chain, length = _chain(robot), _length_scale(robot)
+    chain, length = robot, _length_scale(robot)
     rng = np.random.default_rng(20240601)
     cands = [p for p in robot.poses.values() if robot.within_limits(p)]
     cands += [_random_q(robot, rng) for _ in range(NG_CANDIDATES)]
@@ -845,14 +694,14 @@ def newton_gauss_context(robot: Robot) -> NewtonGaussContext:
             if all(np.max(np.abs(q - s[0])) > NG_MIN_SEPARATION for s in starts):
                 starts.append((q, c, None))
     starts.sort(key=lambda t: t[1])
-    ctx = NewtonGaussContext(key=key, starts=starts, length=length)
+    ctx = NewtonGaussContext(starts=starts, length=length)
     _NG_CACHE[robot] = ctx
     return ctx
 
 
 @dataclass
 class _NGProblem:
-    chain: _Chain
+    chain: Robot
     lo: Array
     hi: Array
     length: float
@@ -870,7 +719,7 @@ class _NGProblem:
         limits. Stops when converged, when the step vanishes or after ``STALL_WINDOW``
         iterations without a ``STALL_IMPROVEMENT`` relative improvement.
         """
-        length, eye = self.length, np.eye(self.chain.n)
+        length, eye = self.length, np.eye(self.chain.dof)
         f, Jf, T = _ng_equations(self.chain, q, T_target, length)
         ep, eo = _pose_errors(T, T_target)
         best = (q, ep, eo)
@@ -956,9 +805,7 @@ def _solve_newton_gauss(
     rng: np.random.Generator,
 ) -> IKSolution:
     ctx = newton_gauss_context(robot)
-    problem = _NGProblem(
-        _chain(robot), robot.lower, robot.upper, ctx.length, tol_p, tol_o, max_iterations
-    )
+    problem = _NGProblem(robot, robot.lower, robot.upper, ctx.length, tol_p, tol_o, max_iterations)
     gap = _reach_gap(robot, T_target)
     budget = min(restarts, UNREACHABLE_RESTARTS) if gap > tol_p else restarts
     # Smallest condition number first; the requested configuration's starts (or else those

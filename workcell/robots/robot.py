@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -99,7 +100,7 @@ class IKSolution:
     method: str = ""
 
 
-@dataclass(eq=False)
+@dataclass(frozen=True, eq=False)
 class Robot:
     """A serial manipulator: DH joints, base and tool transforms, named poses, link geometry.
 
@@ -123,7 +124,8 @@ class Robot:
     gripper: Gripper | None = None
 
     def __post_init__(self) -> None:
-        self.joints = tuple(self.joints)
+        put = partial(object.__setattr__, self)  # frozen: derived fields are set once here
+        put("joints", tuple(self.joints))
         if not self.joints:
             raise KinematicsError(f"robot '{self.name}' has no joints")
         if self.convention not in ("standard", "modified"):
@@ -131,19 +133,27 @@ class Robot:
         names = [j.name for j in self.joints]
         if len(set(names)) != len(names):
             raise KinematicsError(f"robot '{self.name}': joint names repeat: {names}")
-        self.base = as_transform(self.base, rigid=True, name=f"{self.name} base")
-        self.tool = as_transform(self.tool, rigid=True, name=f"{self.name} tool")
-        self.poses = {k: self._vector(v, f"pose '{k}'") for k, v in dict(self.poses).items()}
+        put("base", as_transform(self.base, rigid=True, name=f"{self.name} base"))
+        put("tool", as_transform(self.tool, rigid=True, name=f"{self.name} tool"))
+        put("poses", {k: self._vector(v, f"pose '{k}'") for k, v in dict(self.poses).items()})
         if not self.nominal_speed > 0:
             raise KinematicsError(f"robot '{self.name}': nominal_speed must be > 0 rad/s")
-        p = np.array(
-            [[j.a, j.alpha, j.d, j.theta, j.offset] for j in self.joints], dtype=np.float64
-        )
-        self._a, self._alpha, self._d, self._theta, self._offset = p.T
-        self._prismatic = np.array([j.kind == "prismatic" for j in self.joints])
-        self._lo = np.array([j.limits[0] for j in self.joints])
-        self._hi = np.array([j.limits[1] for j in self.joints])
-        self._ca, self._sa = np.cos(self._alpha), np.sin(self._alpha)
+        put("_offset", np.array([j.offset for j in self.joints]))
+        put("_prismatic", np.array([j.kind == "prismatic" for j in self.joints]))
+        put("_any_prismatic", bool(self._prismatic.any()))
+        put("_lo", np.array([j.limits[0] for j in self.joints]))
+        put("_hi", np.array([j.limits[1] for j in self.joints]))
+        put("_lo_turns", self._lo / TWO_PI - 1e-12)  # limits in turns, with the wrap slack
+        put("_hi_turns", self._hi / TWO_PI + 1e-12)
+        # every joint matrix is linear in (u, v): A = C0 + u C1 + v C2, with (u, v) =
+        # (cos theta, sin theta) for a revolute joint and (d, 0) for a prismatic one
+        C0, C12 = _linear_joint_terms(self)
+        put("_C", (C0, np.ascontiguousarray(C12[:, 0]), np.ascontiguousarray(C12[:, 1])))
+        # the same with the base folded into joint 1 and the tool into joint n (for FK)
+        C0, C12 = C0.reshape(-1, 4, 4).copy(), C12.reshape(-1, 2, 4, 4).copy()
+        C0[0], C12[0] = self.base @ C0[0], self.base @ C12[0]
+        C0[-1], C12[-1] = C0[-1] @ self.tool, C12[-1] @ self.tool
+        put("_Cf", (C0.reshape(-1, 16), C12[:, 0].reshape(-1, 16), C12[:, 1].reshape(-1, 16)))
 
     # ---------------------------------------------------------------- basics
     @property
@@ -210,45 +220,59 @@ class Robot:
             )
         return v
 
+    def wrap_batch(
+        self, Q: ArrayLike, near: ArrayLike | None = None
+    ) -> tuple[Array, NDArray[np.bool_]]:
+        """2*pi-equivalents of joint vectors Q (..., n) inside the limits, vectorised.
+
+        Each revolute joint takes the equivalent nearest to ``near`` (..., n) (default: its
+        own value); prismatic joints are not wrapped. Returns (wrapped, ok) where ``ok``
+        (..., n) marks the joints that have an in-limit value; a joint without one keeps
+        its given value.
+        """
+        Q = np.asarray(Q, dtype=np.float64)
+        turns = Q * (1.0 / TWO_PI)
+        k_lo = np.ceil(self._lo_turns - turns)
+        k_hi = np.floor(self._hi_turns - turns)
+        k = (
+            0.0
+            if near is None
+            else np.rint(np.asarray(near, dtype=np.float64) * (1.0 / TWO_PI) - turns)
+        )
+        k = np.minimum(np.maximum(k, k_lo), k_hi)
+        ok = k_lo <= k_hi
+        if self._any_prismatic:  # prismatic joints are not wrapped: in limits or not
+            k = np.where(self._prismatic, 0.0, k)
+            inside = (self._lo - 1e-12 <= Q) & (self._hi + 1e-12 >= Q)
+            ok = np.where(self._prismatic, inside, ok)
+        W = np.where(ok, np.minimum(np.maximum(Q + TWO_PI * k, self._lo), self._hi), Q)
+        return W, ok
+
     def wrap_to_limits(self, q: ArrayLike, near: ArrayLike | None = None) -> Array | None:
         """The 2*pi-equivalent of q inside the limits (revolute joints), nearest to ``near``.
 
-        Returns None when some joint has no equivalent inside its limits. Prismatic joints
-        are not wrapped.
+        Returns None when some joint has no equivalent inside its limits (see :meth:`wrap_batch`).
         """
-        v = self._vector(q).copy()
-        ref = v if near is None else self._vector(near, "near")
-        for i in np.flatnonzero(~self._prismatic):
-            k_lo = np.ceil((self._lo[i] - v[i]) / TWO_PI - 1e-12)
-            k_hi = np.floor((self._hi[i] - v[i]) / TWO_PI + 1e-12)
-            if k_lo > k_hi:
-                return None
-            ks = np.arange(k_lo, k_hi + 1)
-            cand = v[i] + TWO_PI * ks
-            v[i] = cand[np.argmin(np.abs(cand - ref[i]))]
-        v = np.clip(v, self._lo, self._hi)  # remove the 1e-12 slack
-        return v if np.all(v >= self._lo) and np.all(v <= self._hi) else None
+        v = self._vector(q)
+        W, ok = self.wrap_batch(v, None if near is None else self._vector(near, "near"))
+        return W if ok.all() else None
 
     # ---------------------------------------------------------------- forward kinematics
-    def _link_transforms(self, Q: Array) -> Array:
-        """(N, n, 4, 4) joint transforms A_i for joint vectors Q (N, n)."""
-        N, n = Q.shape
-        theta = np.where(self._prismatic, self._theta, Q + self._offset)
-        d = np.where(self._prismatic, Q + self._offset, self._d)
-        ct, st = np.cos(theta), np.sin(theta)
-        ca, sa = np.broadcast_to(self._ca, (N, n)), np.broadcast_to(self._sa, (N, n))
-        a = np.broadcast_to(self._a, (N, n))
-        A = np.zeros((N, n, 4, 4))
-        if self.convention == "standard":
-            A[..., 0, 0], A[..., 0, 1], A[..., 0, 2], A[..., 0, 3] = ct, -st * ca, st * sa, a * ct
-            A[..., 1, 0], A[..., 1, 1], A[..., 1, 2], A[..., 1, 3] = st, ct * ca, -ct * sa, a * st
-            A[..., 2, 1], A[..., 2, 2], A[..., 2, 3] = sa, ca, d
-        else:
-            A[..., 0, 0], A[..., 0, 1], A[..., 0, 3] = ct, -st, a
-            A[..., 1, 0], A[..., 1, 1], A[..., 1, 2], A[..., 1, 3] = st * ca, ct * ca, -sa, -d * sa
-            A[..., 2, 0], A[..., 2, 1], A[..., 2, 2], A[..., 2, 3] = st * sa, ct * sa, ca, d * ca
-        A[..., 3, 3] = 1.0
-        return A
+    def _joint_matrices(self, Q: Array, *, folded: bool = False) -> Array:
+        """Joint transforms A_i (..., n, 4, 4) for joint vectors Q (..., n), unvalidated.
+
+        ``folded``: base included in A_1 and tool in A_n, so their product is the tool pose.
+        """
+        u = Q + self._offset
+        c, s = np.cos(u), np.sin(u)
+        if self._any_prismatic:
+            c[..., self._prismatic] = u[..., self._prismatic]
+            s[..., self._prismatic] = 0.0
+        C0, C1, C2 = self._Cf if folded else self._C
+        A = c[..., None] * C1
+        A += s[..., None] * C2
+        A += C0
+        return A.reshape(*Q.shape, 4, 4)
 
     def _as_batch(self, Q: ArrayLike) -> Array:
         M = np.asarray(Q, dtype=np.float64)
@@ -260,41 +284,65 @@ class Robot:
 
     def fk_batch(self, Q: ArrayLike) -> Array:
         """Tool poses (N, 4, 4) in the base frame for joint vectors Q (N, n) (m, rad)."""
-        A = self._link_transforms(self._as_batch(Q))
-        T = np.matmul(self.base, A[:, 0])
-        for i in range(1, self.dof):
-            T = np.matmul(T, A[:, i])
-        return np.matmul(T, self.tool)
+        return self._fk_unchecked(self._as_batch(Q))
+
+    def _fk_unchecked(self, Q: Array) -> Array:
+        """:meth:`fk_batch` for a finite (N, n) float array (solvers that made Q themselves)."""
+        A = self._joint_matrices(Q, folded=True)
+        tails = []  # multiply neighbours pairwise (fewer, larger products); odd ones wait
+        while A.shape[1] > 1:
+            if A.shape[1] % 2:
+                tails.append(A[:, -1])
+                A = A[:, :-1]
+            A = np.matmul(A[:, 0::2], A[:, 1::2])
+        T = A[:, 0]
+        for t in reversed(tails):
+            T = np.matmul(T, t)
+        return T
 
     def fk(self, q: ArrayLike) -> Array:
         """Tool pose (4, 4) in the base frame for joint vector q (m, rad)."""
         return self.fk_batch(self._vector(q)[None])[0]
 
-    def link_frames(self, q: ArrayLike) -> Array:
-        """Frames 0..n (n+1, 4, 4): frame 0 is ``base``, frame i follows joint i (no tool)."""
-        A = self._link_transforms(self._vector(q)[None])[0]
+    def _frames(self, q: Array) -> Array:
+        A = self._joint_matrices(q)
         F = np.empty((self.dof + 1, 4, 4))
         F[0] = self.base
         for i in range(self.dof):
             F[i + 1] = F[i] @ A[i]
         return F
 
-    def jacobian(self, q: ArrayLike) -> Array:
-        """Geometric Jacobian (6, n) of the tool point in the base frame: rows v (m/s), w (rad/s).
+    def link_frames(self, q: ArrayLike) -> Array:
+        """Frames 0..n (n+1, 4, 4): frame 0 is ``base``, frame i follows joint i (no tool)."""
+        return self._frames(self._vector(q))
 
-        Joint i moves about (or along) the z axis of frame i-1 (standard DH) or of frame i
-        (modified DH).
+    def pose_jacobian(self, q: ArrayLike) -> tuple[Array, Array]:
+        """Tool pose (4, 4) and geometric Jacobian (6, n) of the tool point, base frame.
+
+        Jacobian rows: linear velocity (m/s) then angular velocity (rad/s) per unit joint
+        speed. Joint i moves about (or along) the z axis of frame i-1 (standard DH) or of
+        frame i (modified DH).
         """
-        F = self.link_frames(q)
-        p_tool = (F[-1] @ self.tool)[:3, 3]
+        q = np.asarray(q, dtype=np.float64)
+        if q.shape != (self.dof,):
+            q = self._vector(q)  # raises with a clear message
+        F = self._frames(q)
+        T = F[-1] @ self.tool
         axes = F[:-1] if self.convention == "standard" else F[1:]
-        z, o = axes[:, :3, 2], axes[:, :3, 3]
-        J = np.zeros((6, self.dof))
-        rev = ~self._prismatic
-        J[:3, rev] = np.cross(z[rev], p_tool - o[rev]).T
-        J[3:, rev] = z[rev].T
-        J[:3, self._prismatic] = z[self._prismatic].T
-        return J
+        z, r = axes[:, :3, 2], T[:3, 3] - axes[:, :3, 3]
+        J = np.empty((6, self.dof))
+        J[0] = z[:, 1] * r[:, 2] - z[:, 2] * r[:, 1]
+        J[1] = z[:, 2] * r[:, 0] - z[:, 0] * r[:, 2]
+        J[2] = z[:, 0] * r[:, 1] - z[:, 1] * r[:, 0]
+        J[3:] = z.T
+        if self._prismatic.any():
+            J[:3, self._prismatic] = z[self._prismatic].T
+            J[3:, self._prismatic] = 0.0
+        return T, J
+
+    def jacobian(self, q: ArrayLike) -> Array:
+        """Geometric Jacobian (6, n) of the tool point in the base frame (see :meth:`pose_jacobian`)."""
+        return self.pose_jacobian(self._vector(q))[1]
 
     # ---------------------------------------------------------------- inverse kinematics
     def ik_closed_form(self, T: ArrayLike, q_current: ArrayLike | None = None) -> list[IKSolution]:
@@ -335,6 +383,46 @@ class Robot:
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, {self.dof} joints, {self.convention} DH)"
+
+
+def _linear_joint_terms(robot: Robot) -> tuple[Array, Array]:
+    """C0 (n, 16) and C1, C2 (n, 2, 16) with A_i = C0 + u C1 + v C2 (see Robot._joint_matrices).
+
+    Standard DH ``Rz(theta) Tz(d) Tx(a) Rx(alpha)``; modified ``Rx(alpha) Tx(a) Rz(theta) Tz(d)``.
+    """
+    n = robot.dof
+    C = np.zeros((n, 3, 4, 4))  # C0, C1, C2
+    for i, j in enumerate(robot.joints):
+        ca, sa, a = np.cos(j.alpha), np.sin(j.alpha), j.a
+        if j.kind == "revolute":
+            d = j.d
+            if robot.convention == "standard":
+                C[i, 0] = [[0, 0, 0, 0], [0, 0, 0, 0], [0, sa, ca, d], [0, 0, 0, 1]]
+                C[i, 1] = [[1, 0, 0, a], [0, ca, -sa, 0], [0, 0, 0, 0], [0, 0, 0, 0]]
+                C[i, 2] = [[0, -ca, sa, 0], [1, 0, 0, a], [0, 0, 0, 0], [0, 0, 0, 0]]
+            else:
+                C[i, 0] = [[0, 0, 0, a], [0, 0, -sa, -d * sa], [0, 0, ca, d * ca], [0, 0, 0, 1]]
+                C[i, 1] = [[1, 0, 0, 0], [0, ca, 0, 0], [0, sa, 0, 0], [0, 0, 0, 0]]
+                C[i, 2] = [[0, -1, 0, 0], [ca, 0, 0, 0], [sa, 0, 0, 0], [0, 0, 0, 0]]
+        else:  # prismatic: theta fixed, d = u enters linearly
+            ct, st = np.cos(j.theta), np.sin(j.theta)
+            if robot.convention == "standard":
+                C[i, 0] = [
+                    [ct, -st * ca, st * sa, a * ct],
+                    [st, ct * ca, -ct * sa, a * st],
+                    [0, sa, ca, 0],
+                    [0, 0, 0, 1],
+                ]
+                C[i, 1, 2, 3] = 1.0
+            else:
+                C[i, 0] = [
+                    [ct, -st, 0, a],
+                    [st * ca, ct * ca, -sa, 0],
+                    [st * sa, ct * sa, ca, 0],
+                    [0, 0, 0, 1],
+                ]
+                C[i, 1, 1, 3], C[i, 1, 2, 3] = -sa, ca
+    return C[:, 0].reshape(n, 16), C[:, 1:].reshape(n, 2, 16)
 
 
 def joints_from_table(
