@@ -21,6 +21,7 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python scripts/bench_modeller.py
+	$(BIN)/python scripts/bench_kinematics.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -28,6 +28,15 @@ MODULES = [
     "workcell.modeller.csg",
     "workcell.modeller.patches",
     "workcell.modeller.show",
+    "workcell.robots",
+    "workcell.robots.robot",
+    "workcell.robots.puma",
+    "workcell.robots.geometry",
+    "workcell.robots.gripper",
+    "workcell.robots.ik_closed",
+    "workcell.robots.ik_numeric",
+    "workcell.robots.mjcf",
+    "workcell.robots.meshes",
 ]
 
 

@@ -1,10 +1,11 @@
 """workcell: a robotic workcell simulator on MuJoCo.
 
 Model parts with the solid modeller (:class:`Model`, :mod:`workcell.solids`), transform
-them with :mod:`workcell.spatial`; every deliberate error is a :class:`WorkcellError`.
+them with :mod:`workcell.spatial`, define robots and solve their kinematics with
+:mod:`workcell.robots`; every deliberate error is a :class:`WorkcellError`.
 """
 
-from workcell import solids, spatial
+from workcell import robots, solids, spatial
 from workcell.errors import (
     CollisionError,
     GeometryError,
@@ -43,6 +44,7 @@ __all__ = [
     "WorkcellError",
     "WorldPart",
     "__version__",
+    "robots",
     "solids",
     "spatial",
 ]
