@@ -303,8 +303,8 @@ def _valid_single(rows: list[list[float]], rigid: bool) -> bool:
     """Fast check of one 4x4 (nested lists) against :func:`as_transforms`' rules; False
     sends it to the vectorised path, which says what is wrong."""
     (a, b, c, _), (d, e, f, _), (g, h, i, _), last = rows
-    if not all(math.isfinite(x) for row in rows for x in row):
-        return False
+    if not math.isfinite(sum(rows[0]) + sum(rows[1]) + sum(rows[2]) + sum(rows[3])):
+        return False  # an entry is not finite (or so large that the sum overflows)
     if max(abs(last[0]), abs(last[1]), abs(last[2]), abs(last[3] - 1.0)) > 1e-12:
         return False
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
