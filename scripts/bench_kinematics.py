@@ -19,26 +19,14 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import statistics
 import time
-from collections.abc import Callable
 
 import mujoco
 import numpy as np
+from benchutil import median_time
 
 from workcell.robots import Robot, puma260, puma560
 from workcell.robots.mjcf import kinematic_model
-
-
-def median_time(fn: Callable[[], object], repeat: int) -> float:
-    """Median wall time (s) of ``fn()`` over ``repeat`` runs after one warm-up run."""
-    fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def ik_stats(robot: Robot, targets: np.ndarray, method: str) -> dict[str, float]:

@@ -15,27 +15,15 @@ Usage: python scripts/bench_modeller.py [--repeat N]
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
-from collections.abc import Callable
 
 import numpy as np
 import trimesh
+from benchutil import median_time
 from shapely.geometry import Polygon
 
 from workcell import solids, spatial
 from workcell.modeller.model import Model
 from workcell.modeller.surface import Surface
-
-
-def median_time(fn: Callable[[], object], repeat: int) -> float:
-    fn()  # warm-up
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def holes_surface(n_holes: int = 200, segments: int = 16) -> tuple[Surface, Polygon]:

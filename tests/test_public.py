@@ -17,6 +17,7 @@ MODULES = [
     "workcell",
     "workcell.errors",
     "workcell.spatial",
+    "workcell.files",
     "workcell.solids",
     "workcell.modeller.surface",
     "workcell.modeller.model",

@@ -22,20 +22,19 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from workcell.errors import GeometryError, ModelError
+from workcell.files import atomic_write_text
 from workcell.modeller.model import BOOLEAN_OPS, CHILD, LEVELS, Model
 from workcell.modeller.surface import Surface
 
 __all__ = [
     "FORMAT",
     "VERSION",
-    "atomic_write_text",
     "load",
     "model_from_dict",
     "model_to_dict",
@@ -149,25 +148,6 @@ def model_from_dict(data: Any) -> Model:
             e.serial = serial
             e.rels.custom = True
     return m
-
-
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` atomically: a temp file in the same folder, then rename."""
-    p = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual file mode
-        os.replace(tmp, p)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def save(model: Model, path: str | os.PathLike) -> None:

@@ -16,16 +16,12 @@ Units: metres.
 
 from __future__ import annotations
 
-import os
-import tempfile
-from pathlib import Path
-
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
 from workcell.modeller.model import Model
 
-__all__ = ["atomic_write_bytes", "convex_pieces", "is_convex", "stl_bytes"]
+__all__ = ["convex_pieces", "is_convex", "stl_bytes"]
 
 _CONVEX_REL_TOL = 1e-7
 
@@ -60,22 +56,3 @@ def convex_pieces(model: Model, block: str) -> tuple[list[trimesh.Trimesh], bool
 def stl_bytes(mesh: trimesh.Trimesh) -> bytes:
     """Binary STL of ``mesh`` (float32 vertices: 84 + 50 x faces bytes)."""
     return mesh.export(file_type="stl")
-
-
-def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically: a temp file in the same folder, then rename."""
-    p = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual file mode
-        os.replace(tmp, p)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise

@@ -41,8 +41,8 @@ import trimesh
 from numpy.typing import NDArray
 
 from workcell.errors import GeometryError, ModelError
-from workcell.modeller.storage import atomic_write_text
-from workcell.robots.meshes import atomic_write_bytes, convex_pieces, stl_bytes
+from workcell.files import atomic_write_bytes, atomic_write_text
+from workcell.robots.meshes import convex_pieces, stl_bytes
 from workcell.robots.robot import Joint, Robot
 from workcell.spatial import invert, is_rigid, quat_from_matrix, rot_x, rot_z, translation
 
