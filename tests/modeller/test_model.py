@@ -1453,7 +1453,8 @@ class ModelMachine(RuleBasedStateMachine):
             T = None if mode == "none" else _rand_affine(data, rigid=mode == "rigid")
         ok = new not in self.sh[lv] and new != BAD_NAMES[1]
         ok = ok and not (lv == "surface" and mode == "affine")
-        ok = ok and not (lv == "scene" and mode == "affine")
+        # an "affine" draw with unit scales is rigid, and a scene accepts it
+        ok = ok and not (lv == "scene" and mode == "affine" and not spatial.is_rigid(T))
         if self._check(ok, lambda: self.m.copy(key, new, T)) is not None:
             src = self.sh[lv][key[1]]
             self.sh[lv][new] = {
