@@ -18,7 +18,7 @@ import argparse
 
 import numpy as np
 import trimesh
-from benchutil import median_time
+from benchutil import paired_median_times
 from shapely.geometry import Polygon
 
 from workcell import solids, spatial
@@ -41,7 +41,7 @@ def holes_surface(n_holes: int = 200, segments: int = 16) -> tuple[Surface, Poly
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--repeat", type=int, default=31)
     args = ap.parse_args()
     rows = []
 
@@ -62,8 +62,7 @@ def main() -> None:
         (
             "sphere m=128 n=64 build+mesh",
             len(a.faces),
-            median_time(ours_sphere, args.repeat),
-            median_time(trimesh_sphere, args.repeat),
+            *paired_median_times(ours_sphere, trimesh_sphere, args.repeat),
         )
     )
 
@@ -83,8 +82,7 @@ def main() -> None:
         (
             "extrude, 200 holes build+mesh",
             len(a.faces),
-            median_time(ours_extrude, args.repeat),
-            median_time(trimesh_extrude, args.repeat),
+            *paired_median_times(ours_extrude, trimesh_extrude, args.repeat),
         )
     )
 
@@ -119,8 +117,7 @@ def main() -> None:
         (
             "scene of 1,000 instances to world mesh",
             len(a.faces),
-            median_time(ours_scene, args.repeat),
-            median_time(trimesh_scene, args.repeat),
+            *paired_median_times(ours_scene, trimesh_scene, args.repeat),
         )
     )
 

@@ -135,20 +135,20 @@ def _sphere_parts(
     """Unit-sphere faces: n distinct faces per half slice, each placed m times, mirrored below;
     every placement then scaled by ``radii`` (a, b, c) (m)."""
     alpha, beta = np.pi / (2 * n), 2 * np.pi / m
-
-    def p(phi: float, lam: float) -> NDArray[np.float64]:
-        return np.array([np.cos(phi) * np.cos(lam), np.cos(phi) * np.sin(lam), np.sin(phi)])
-
-    Rz = np.stack([spatial.rot_z(k * beta) for k in range(m)])
+    lam = np.arange(m) * beta
+    Rz = np.zeros((m, 4, 4))  # rotations about z by k beta
+    Rz[:, 0, 0] = Rz[:, 1, 1] = np.cos(lam)
+    Rz[:, 1, 0] = np.sin(lam)
+    Rz[:, 0, 1] = -Rz[:, 1, 0]
+    Rz[:, 2, 2] = Rz[:, 3, 3] = 1.0
     surfaces, relations = {}, []
-    lat = np.minimum(np.arange(n + 1) * alpha, np.pi / 2)
-    lat[-1] = np.pi / 2
-    corners = np.array(
-        [
-            [p(lat[j], 0.0), p(lat[j], beta), p(lat[j + 1], beta), p(lat[j + 1], 0.0)]
-            for j in range(n)
-        ]
-    )
+    lat = np.arange(n + 1) * alpha
+    lat[-1] = np.pi / 2  # the pole exactly
+    ring = np.column_stack([np.cos(lat), np.zeros(n + 1), np.sin(lat)])  # longitude 0
+    turned = ring * [np.cos(beta), 1.0, 1.0]  # longitude beta
+    turned[:, 1] = ring[:, 0] * np.sin(beta)
+    # band j: (lat j, 0), (lat j, beta), (lat j+1, beta), (lat j+1, 0), outward-facing
+    corners = np.stack([ring[:-1], turned[:-1], turned[1:], ring[1:]], axis=1)
     names = [f"{name}.band{j}" for j in range(n)]
     patches, F = planar_patches(corners, names)
     # all placements at once: (n bands, 2 hemispheres, m slices, 4, 4); the lower hemisphere is
