@@ -36,6 +36,9 @@ MODULES = [
     "workcell.robots.gripper",
     "workcell.robots.ik_closed",
     "workcell.robots.ik_numeric",
+    "workcell.robots.ik_common",
+    "workcell.robots.ik_mink",
+    "workcell.robots.ik_newton",
     "workcell.robots.mjcf",
     "workcell.robots.meshes",
 ]

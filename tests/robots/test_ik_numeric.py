@@ -19,7 +19,17 @@ from scipy.spatial.transform import Rotation
 
 from workcell import spatial
 from workcell.errors import KinematicsError, UnreachableError
-from workcell.robots import Joint, Robot, ik_closed, ik_numeric, puma260, puma560
+from workcell.robots import (
+    Joint,
+    Robot,
+    ik_closed,
+    ik_common,
+    ik_mink,
+    ik_newton,
+    ik_numeric,
+    puma260,
+    puma560,
+)
 
 TOL_P, TOL_O = 1e-6, 1e-6
 
@@ -121,7 +131,7 @@ def test_orientation_error_is_the_rotation_angle(axis, angle):
     k = np.array(axis) / np.linalg.norm(axis)
     R0 = Rotation.from_rotvec([0.3, -1.1, 2.0]).as_matrix()
     R1 = R0 @ Rotation.from_rotvec(angle * k).as_matrix()
-    assert ik_numeric.orientation_error(R0, R1) == pytest.approx(angle, rel=1e-9, abs=3e-16)
+    assert spatial.angle_between(R0, R1) == pytest.approx(angle, rel=1e-9, abs=3e-16)
 
 
 def test_max_reach_bounds_every_tool_point():
@@ -129,7 +139,7 @@ def test_max_reach_bounds_every_tool_point():
         r = robot_named(name)
         _, T = random_targets(r, 500, 4)
         origin = r.base[:3, 3]
-        assert np.linalg.norm(T[:, :3, 3] - origin, axis=1).max() <= ik_numeric.max_reach(r)
+        assert np.linalg.norm(T[:, :3, 3] - origin, axis=1).max() <= ik_common.max_reach(r)
 
 
 def test_newton_gauss_equations_and_jacobian():
@@ -145,7 +155,7 @@ def test_newton_gauss_equations_and_jacobian():
         T_target = T.copy()
         T_target[:3, :3] = Rotation.from_rotvec(t * k).as_matrix() @ T[:3, :3]
         T_target[:3, 3] += [0.1, -0.2, 0.05]
-        f, Jf, Tq = ik_numeric.ng_residual_jacobian(r, q, T_target, length=0.5)
+        f, Jf, Tq = ik_newton.ng_residual_jacobian(r, q, T_target, length=0.5)
         np.testing.assert_allclose(Tq, T, atol=1e-14)
         np.testing.assert_allclose(f[:3], -np.array([0.1, -0.2, 0.05]) / 0.5, atol=1e-14)
         np.testing.assert_allclose(f[3:6], math.sin(t) * k, atol=1e-14)
@@ -188,7 +198,7 @@ def test_position_gradient_and_hessian_match_finite_differences():
     h = 1e-5
     for r in robots:
         for q in np.random.default_rng(7).uniform(r.lower, r.upper, (5, r.dof)):
-            f, grad, H = ik_numeric.position_gradient_hessian(r, q, P)
+            f, grad, H = ik_common.position_gradient_hessian(r, q, P)
             assert f == pytest.approx(g(r, q), rel=1e-14)
             E = np.eye(r.dof) * h
             fd_grad = np.array([(g(r, q + e) - g(r, q - e)) / (2 * h) for e in E])
@@ -265,7 +275,7 @@ def test_config_without_closed_form_seeds(monkeypatch):
     found exactly when the closed form has an in-limit solution in it, and it is that one."""
     r = robot_named("puma560")
     _, Ts = random_targets(r, 10, 13)
-    monkeypatch.setattr(ik_numeric, "_closed_form_seeds", lambda *a: None)
+    monkeypatch.setattr(ik_mink, "_closed_form_seeds", lambda *a: None)
     for T in Ts:
         valid = {s.config: s for s in ik_closed.puma_ik(r, T) if s.within_limits}
         for config in ("run", "ldf"):
@@ -343,7 +353,7 @@ def test_unreachable_target_two_metres_out(name, method):
         assert sol.position_error >= 2.0 - 1e-9  # no pose is closer
         assert sol.position_error == pytest.approx(2.0, abs=1e-4)
         # bounded work: a few attempts, not the full restart budget
-        assert sol.iterations <= 4 * ik_numeric.DEFAULT_MAX_ITERATIONS[method] * 3
+        assert sol.iterations <= 4 * ik_common.DEFAULT_MAX_ITERATIONS[method] * 3
         with pytest.raises(UnreachableError, match="unreachable"):
             r.ik_or_raise(T, method=method)
 
@@ -354,7 +364,7 @@ def test_unreachable_generic_robot_reports_the_gap():
     sol = r.ik(T)
     assert not sol.success
     assert "beyond the robot's reach" in sol.reason
-    assert sol.position_error >= 3.0 - ik_numeric.max_reach(r)
+    assert sol.position_error >= 3.0 - ik_common.max_reach(r)
     assert np.all(sol.q >= r.lower)
     assert np.all(sol.q <= r.upper)
 
@@ -395,7 +405,7 @@ def test_newton_gauss_starts_at_small_condition_numbers():
     """Every start's condition number is at most that of the robot's named poses whose
     configuration it shares ... and below the median of random configurations."""
     r = robot_named("puma560")
-    ctx = ik_numeric.newton_gauss_context(r)
+    ctx = ik_newton.newton_gauss_context(r)
     conds = [c for _, c, _ in ctx.starts]
     assert conds == sorted(conds)
     assert len({cfg for _, _, cfg in ctx.starts}) == 8  # a start on every branch
@@ -418,13 +428,13 @@ def test_mink_context_is_built_once_per_robot(monkeypatch):
     r = puma560(geometry=False)
     T = r.fk(r.pose("qn"))
     r.ik(T)
-    ctx = ik_numeric.mink_context(r)
+    ctx = ik_mink.mink_context(r)
     parts = (ctx.model, ctx.configuration, ctx.task, ctx.limits, ctx.limits[0])
     calls = []
-    monkeypatch.setattr(ik_numeric, "kinematic_model", lambda robot: calls.append(robot))
+    monkeypatch.setattr(ik_mink, "kinematic_model", lambda robot: calls.append(robot))
     r.ik(T)
     r.ik(T, method="newton-gauss")
-    again = ik_numeric.mink_context(r)
+    again = ik_mink.mink_context(r)
     assert again is ctx
     assert all(
         a is b
@@ -435,10 +445,10 @@ def test_mink_context_is_built_once_per_robot(monkeypatch):
         )
     )
     assert calls == []
-    assert ik_numeric.newton_gauss_context(r) is ik_numeric.newton_gauss_context(r)
+    assert ik_newton.newton_gauss_context(r) is ik_newton.newton_gauss_context(r)
     other = r.with_(name="other", base=spatial.translation(1, 0, 0))
     monkeypatch.undo()
-    assert ik_numeric.mink_context(other) is not ctx
+    assert ik_mink.mink_context(other) is not ctx
 
 
 def test_bad_input_is_refused():

@@ -346,7 +346,11 @@ class Robot:
 
     # ---------------------------------------------------------------- inverse kinematics
     def ik_closed_form(self, T: ArrayLike, q_current: ArrayLike | None = None) -> list[IKSolution]:
-        """Every distinct closed-form solution of pose T (Puma family), up to 8, nearest first."""
+        """Every distinct closed-form solution of pose T (Puma family), up to 8.
+
+        In-limit solutions first, then nearest to ``q_current`` (see
+        :func:`workcell.robots.ik_closed.puma_ik_report` for the fields and the order).
+        """
         if self.family != "puma":
             raise KinematicsError(
                 f"robot '{self.name}' has no closed-form IK (family {self.family!r}); use Robot.ik"
