@@ -217,3 +217,11 @@ def test_puma_tables_as_designed():
     np.testing.assert_allclose(P260.tool, spatial.translation(0, 0, 0.05588))
     np.testing.assert_allclose(np.degrees(P260.max_speeds), [119, 119, 164, 577, 431, 397])
     np.testing.assert_allclose(np.degrees(P260.pose("home")), [0, 0, -90, 0, 90, 0])
+
+
+def test_fk_batch_of_many_poses_crosses_chunks_exactly():
+    rng = np.random.default_rng(9)
+    Q = rng.uniform(P560.lower, P560.upper, (5000, 6))  # more than one internal chunk
+    TB = P560.fk_batch(Q)
+    for i in (0, 2047, 2048, 2049, 4095, 4096, 4999):
+        np.testing.assert_allclose(TB[i], thesis_fk(P560, Q[i]), atol=1e-12)
