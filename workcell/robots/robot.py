@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import partial
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -79,9 +79,8 @@ class LinkGeometry:
     colour: tuple[float, ...] | None = None
 
 
-@dataclass(frozen=True)
-class IKSolution:
-    """One inverse-kinematics answer.
+class IKSolution(NamedTuple):
+    """One inverse-kinematics answer (an immutable record; a named tuple, cheap to build).
 
     ``q`` (n,) joint values; ``success`` when the pose is reached within tolerance and the
     limits; ``config`` the Puma configuration letters (arm l|r, elbow u|d, wrist n|f) when
