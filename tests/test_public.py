@@ -41,6 +41,9 @@ MODULES = [
     "workcell.robots.ik_newton",
     "workcell.robots.mjcf",
     "workcell.robots.meshes",
+    "workcell.cell",
+    "workcell.cell.workcell",
+    "workcell.cell.compile",
 ]
 
 

@@ -6,6 +6,7 @@ them with :mod:`workcell.spatial`, define robots and solve their kinematics with
 """
 
 from workcell import robots, solids, spatial
+from workcell.cell import CompiledCell, Workcell, compile_cell, export_cell
 from workcell.errors import (
     CollisionError,
     GeometryError,
@@ -27,6 +28,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "CollisionError",
+    "CompiledCell",
     "EntityInfo",
     "GeometryError",
     "GraspError",
@@ -41,9 +43,12 @@ __all__ = [
     "Surface",
     "UnreachableError",
     "ValidityReport",
+    "Workcell",
     "WorkcellError",
     "WorldPart",
     "__version__",
+    "compile_cell",
+    "export_cell",
     "robots",
     "solids",
     "spatial",

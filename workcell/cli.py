@@ -47,6 +47,16 @@ def _demo_solids(args: argparse.Namespace) -> int:
     return 0 if same and all(r.valid for r in rows) else 1
 
 
+def _export(args: argparse.Namespace) -> int:
+    from workcell.cell import Workcell, export_cell
+
+    t0 = time.perf_counter()
+    cell = Workcell.load(args.cell)
+    path = export_cell(cell, args.out)
+    print(f"wrote {path} ({time.perf_counter() - t0:.2f} s)")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``workcell`` command."""
     parser = argparse.ArgumentParser(
@@ -62,6 +72,12 @@ def main(argv: list[str] | None = None) -> int:
         "--json", action="store_true", help="print one JSON object instead of a table"
     )
     demo.set_defaults(func=_demo_solids)
+    export = sub.add_parser(
+        "export", help="write a cell (JSON) as one MJCF file plus its STL meshes"
+    )
+    export.add_argument("cell", metavar="CELL.json", help="a cell saved by Workcell.save")
+    export.add_argument("--out", metavar="DIR", required=True, help="output folder")
+    export.set_defaults(func=_export)
     args = parser.parse_args(argv)
     try:
         return args.func(args)

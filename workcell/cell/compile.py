@@ -1,0 +1,269 @@
+"""Compile a :class:`Workcell` to MuJoCo through MjSpec, and export it as MJCF + STL meshes.
+
+Contents of the compiled model (all names MJCF-safe, never '/'):
+
+- ``ground``: a plane at z = 0;
+- static part ``P``: geoms of the worldbody at the part's pose: ``P.visual`` (the exact
+  mesh, ``inertia="exact"``, no contacts, group 2) and ``P.col{i}`` (convex collision
+  pieces, group 3; see :func:`workcell.robots.meshes.convex_pieces`);
+- movable part ``P``: a body ``P`` at its pose with a free joint ``P.free``, one visual
+  mesh geom ``P.visual`` carrying the mass (exact inertia at the part's density) and
+  collision geoms ``P.col{i}`` with density 0;
+- robot ``R``: :func:`workcell.robots.mjcf.robot_spec` attached with prefix ``"R."``;
+  its link 0 body sits at ``base @ robot.base`` in the world;
+- one weld equality ``grasp.R.P`` per (robot with gripper, movable part), inactive,
+  body1 = the gripper body, body2 = the part, with explicit ``data`` (anchor 0, relpose
+  identity, torquescale 1; the simulator writes the captured relative pose on grasp)
+  and a stiff ``solref`` (0.004, 1);
+- camera ``C``: an MJCF camera at the position, turned so its -z axis points to the target.
+
+Initial joint values live in ``qpos0`` through each joint's ``ref``: the link bodies are
+written at their pose for the initial q (body frame ``placement @ Rz(q0)``) and
+``ref = q0``, so MuJoCo's joint value is the robot's joint value (``qpos = q`` gives
+``fk(q)``) and ``qpos0``, the XML's default pose and ``mj_resetData`` are the initial
+configuration. The exported XML contains no ``<frame>`` element (dm_control 1.0.50's
+schema lacks it): robots are attached through an identity frame, which is not written.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import trimesh
+
+from workcell.cell.workcell import Workcell
+from workcell.errors import GeometryError
+from workcell.files import atomic_write_bytes, atomic_write_text
+from workcell.modeller.model import Model
+from workcell.robots.meshes import convex_pieces, is_convex, stl_bytes
+from workcell.robots.mjcf import (
+    COLLISION_GROUP,
+    MESHDIR,
+    VISUAL_GROUP,
+    body_name,
+    finger_joint_names,
+    gripper_body_name,
+    joint_name,
+    robot_spec,
+    spec_to_xml,
+)
+from workcell.spatial import pose_from_pos_quat, quat_from_matrix, rot_z, translation
+
+__all__ = ["GRASP_SOLREF", "GROUND", "WELD_DATA", "CompiledCell", "compile_cell", "export_cell"]
+
+GROUND = "ground"
+GRASP_SOLREF = (0.004, 1.0)
+# anchor (3) | relpos (3) | relquat wxyz (4) | torquescale | flag (0: relpose given)
+WELD_DATA = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
+_EXACT = mujoco.mjtMeshInertia.mjMESH_INERTIA_EXACT
+_MESH = mujoco.mjtGeom.mjGEOM_MESH
+
+
+@dataclass
+class CompiledCell:
+    """A compiled cell: the MjSpec, the MjModel and the names of what the simulator needs.
+
+    Maps by cell name: ``robot_prefixes`` ("puma_1" -> "puma_1."), ``joint_names``
+    (arm joints in DH order), ``finger_joints`` (left, right slides; robots with a
+    gripper), ``tool_sites``, ``gripper_bodies``, ``part_bodies`` (movable parts),
+    ``free_joints`` (movable parts), ``welds`` ((robot, part) -> equality name),
+    ``cameras``. ``assets`` holds the mesh files (name -> STL bytes).
+    """
+
+    spec: mujoco.MjSpec
+    model: mujoco.MjModel
+    robot_prefixes: dict[str, str] = field(default_factory=dict)
+    joint_names: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    finger_joints: dict[str, tuple[str, str]] = field(default_factory=dict)
+    tool_sites: dict[str, str] = field(default_factory=dict)
+    gripper_bodies: dict[str, str] = field(default_factory=dict)
+    part_bodies: dict[str, str] = field(default_factory=dict)
+    free_joints: dict[str, str] = field(default_factory=dict)
+    welds: dict[tuple[str, str], str] = field(default_factory=dict)
+    cameras: dict[str, str] = field(default_factory=dict)
+    assets: Mapping[str, bytes] = field(default_factory=dict)
+
+
+def _pos_quat(T: np.ndarray) -> tuple[list[float], list[float]]:
+    return T[:3, 3].tolist(), quat_from_matrix(T[:3, :3]).tolist()
+
+
+def _pieces(model: Model, ref: tuple[str, str]) -> tuple[list[trimesh.Trimesh], bool]:
+    """Convex collision pieces of a block or object in its own frame, and whether it is convex."""
+    level, name = ref
+    if level == "block":
+        return convex_pieces(model, name)
+    mesh = model.world_mesh(ref)
+    if is_convex(mesh):
+        return [mesh], True
+    out: list[trimesh.Trimesh] = []
+    for rel in model.relations(ref):
+        if rel.target_level not in ("block", "object"):
+            return [mesh.convex_hull], False
+        sub, _ = _pieces(model, (rel.target_level, rel.target))
+        out.extend(p.copy().apply_transform(rel.transform) for p in sub)
+    return (out or [mesh.convex_hull]), False
+
+
+def _add_part_geoms(
+    spec: mujoco.MjSpec,
+    parent: mujoco.MjsBody,
+    model: Model,
+    name: str,
+    entity: tuple[str, str],
+    colour: tuple[float, ...],
+    pose: np.ndarray,
+    density: float,
+    assets: dict[str, bytes],
+) -> None:
+    """Mesh assets of a part, its visual (mass-carrying) geom and collision geoms in ``parent``."""
+    vis = f"{name}.mesh"
+    assets[f"{vis}.stl"] = stl_bytes(model.world_mesh(entity))
+    spec.add_mesh(name=vis, file=f"{vis}.stl", inertia=_EXACT)
+    pieces, convex = _pieces(model, entity)
+    cols = [vis]
+    if not convex:
+        cols = []
+        for i, p in enumerate(pieces):
+            mname = f"{name}.hull{i}"
+            assets[f"{mname}.stl"] = stl_bytes(p)
+            spec.add_mesh(name=mname, file=f"{mname}.stl", inertia=_EXACT)
+            cols.append(mname)
+    pos, quat = _pos_quat(pose)
+    rgba = list(colour)
+    parent.add_geom(
+        name=f"{name}.visual",
+        type=_MESH,
+        meshname=vis,
+        pos=pos,
+        quat=quat,
+        density=density,
+        contype=0,
+        conaffinity=0,
+        group=VISUAL_GROUP,
+        rgba=rgba,
+    )
+    for i, c in enumerate(cols):
+        parent.add_geom(
+            name=f"{name}.col{i}",
+            type=_MESH,
+            meshname=c,
+            pos=pos,
+            quat=quat,
+            density=0.0,
+            contype=1,
+            conaffinity=1,
+            group=COLLISION_GROUP,
+            rgba=[*rgba[:3], 0.5],
+        )
+
+
+def _set_initial_q(child: mujoco.MjSpec, robot, q: np.ndarray) -> None:  # noqa: ANN001
+    """Write the link bodies at q and set each joint's ``ref`` to q (so qpos0 = q)."""
+    for i, jt in enumerate(robot.joints):
+        body = child.body(body_name("", i + 1))
+        T = pose_from_pos_quat(body.pos, body.quat)
+        T = T @ translation(0, 0, float(q[i])) if jt.kind == "prismatic" else T @ rot_z(float(q[i]))
+        body.pos, body.quat = _pos_quat(T)
+        child.joint(joint_name(robot, "", i)).ref = float(q[i])
+
+
+def _build(cell: Workcell) -> CompiledCell:
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False
+    spec.compiler.meshdir = MESHDIR
+    spec.modelname = cell.name
+    assets: dict[str, bytes] = {}
+    out = CompiledCell(spec=spec, model=None)  # type: ignore[arg-type]
+    spec.worldbody.add_geom(
+        name=GROUND,
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[0.0, 0.0, 0.05],
+        rgba=[0.85, 0.85, 0.85, 1.0],
+    )
+    spec.worldbody.add_light(name="light", pos=[0, 0, 3], dir=[0, 0, -1])
+    m = cell.model
+    for p in cell.static_parts.values():
+        _add_part_geoms(spec, spec.worldbody, m, p.name, p.entity, p.colour, p.pose, 1000.0, assets)
+    for p in cell.movable_parts.values():
+        body = spec.worldbody.add_body(name=p.name)
+        body.pos, body.quat = _pos_quat(p.pose)
+        body.add_freejoint(name=f"{p.name}.free")
+        _add_part_geoms(spec, body, m, p.name, p.entity, p.colour, np.eye(4), p.density, assets)
+        out.part_bodies[p.name] = p.name
+        out.free_joints[p.name] = f"{p.name}.free"
+    for r in cell.robots.values():
+        prefix = f"{r.name}."
+        child = robot_spec(r.robot, prefix="")
+        link0 = child.body(body_name("", 0))
+        link0.pos, link0.quat = _pos_quat(r.world_base)
+        _set_initial_q(child, r.robot, r.q)
+        for file, data in child.assets.items():  # attach prefixes mesh file names too
+            assets[f"{prefix}{file}"] = data
+        frame = spec.worldbody.add_frame()  # identity: not written to the XML
+        spec.attach(child, frame=frame, prefix=prefix)
+        out.robot_prefixes[r.name] = prefix
+        out.joint_names[r.name] = tuple(joint_name(r.robot, prefix, i) for i in range(r.robot.dof))
+        out.tool_sites[r.name] = f"{prefix}tool"
+        if r.robot.gripper is not None:
+            out.gripper_bodies[r.name] = gripper_body_name(r.robot, prefix)
+            out.finger_joints[r.name] = finger_joint_names(r.robot, prefix)
+    for rname, gbody in out.gripper_bodies.items():
+        for pname, pbody in out.part_bodies.items():
+            ename = f"grasp.{rname}.{pname}"
+            spec.add_equality(
+                name=ename,
+                type=mujoco.mjtEq.mjEQ_WELD,
+                objtype=mujoco.mjtObj.mjOBJ_BODY,
+                name1=gbody,
+                name2=pbody,
+                active=False,
+                data=list(WELD_DATA),
+                solref=list(GRASP_SOLREF),
+            )
+            out.welds[(rname, pname)] = ename
+    for c in cell.cameras.values():
+        pos, quat = _pos_quat(c.pose())
+        spec.worldbody.add_camera(name=c.name, pos=pos, quat=quat, fovy=c.fovy)
+        out.cameras[c.name] = c.name
+    spec.assets = assets
+    out.assets = assets
+    return out
+
+
+def compile_cell(cell: Workcell) -> CompiledCell:
+    """Build the cell's MjSpec and compile it (a MuJoCo error raises GeometryError)."""
+    out = _build(cell)
+    try:
+        out.model = out.spec.compile()
+    except ValueError as exc:
+        raise GeometryError(f"cell '{cell.name}' does not compile in MuJoCo: {exc}") from exc
+    return out
+
+
+def export_cell(
+    cell: Workcell, out_dir: str | os.PathLike, *, file_name: str | None = None
+) -> Path:
+    """Write the cell as one MJCF file plus STL meshes in ``out_dir/meshes``; return the XML path.
+
+    The XML (default ``"{cell.name}.xml"``) names its meshes relative to itself, so the
+    folder loads from any working directory, in plain MuJoCo and dm_control. The cell is
+    compiled before anything is written; every file is written atomically.
+    """
+    compiled = compile_cell(cell)
+    try:
+        xml = spec_to_xml(compiled.spec)
+    except ValueError as exc:
+        raise GeometryError(f"cell '{cell.name}' cannot be written as MJCF: {exc}") from exc
+    out = Path(out_dir)
+    (out / MESHDIR).mkdir(parents=True, exist_ok=True)
+    for file, data in compiled.assets.items():
+        atomic_write_bytes(out / MESHDIR / file, data)
+    path = out / (file_name or f"{cell.name}.xml")
+    atomic_write_text(path, xml)
+    return path
