@@ -44,6 +44,10 @@ MODULES = [
     "workcell.cell",
     "workcell.cell.workcell",
     "workcell.cell.compile",
+    "workcell.sim",
+    "workcell.sim.timeline",
+    "workcell.sim.simulator",
+    "workcell.examples.thesis_joints",
 ]
 
 

@@ -5,7 +5,7 @@ them with :mod:`workcell.spatial`, define robots and solve their kinematics with
 :mod:`workcell.robots`; every deliberate error is a :class:`WorkcellError`.
 """
 
-from workcell import robots, solids, spatial
+from workcell import robots, sim, solids, spatial
 from workcell.cell import CompiledCell, Workcell, compile_cell, export_cell
 from workcell.errors import (
     CollisionError,
@@ -23,6 +23,7 @@ from workcell.modeller.meshprops import MassProperties, ValidityReport
 from workcell.modeller.model import EntityInfo, Model, Relation
 from workcell.modeller.surface import Surface
 from workcell.modeller.world import WorldPart
+from workcell.sim import Simulator, Timeline
 
 __version__ = "0.1.0"
 
@@ -40,7 +41,9 @@ __all__ = [
     "ProgramError",
     "ProtocolError",
     "Relation",
+    "Simulator",
     "Surface",
+    "Timeline",
     "UnreachableError",
     "ValidityReport",
     "Workcell",
@@ -50,6 +53,7 @@ __all__ = [
     "compile_cell",
     "export_cell",
     "robots",
+    "sim",
     "solids",
     "spatial",
 ]
