@@ -195,3 +195,31 @@ def test_non_convex_object_part_gets_convex_pieces():
     assert len(cols) == 2
     vol = cell.model.world_mesh(("object", "ell")).volume
     assert mm.body_mass[mm.body("ell_part").id] == pytest.approx(1000.0 * vol, rel=1e-6)
+
+
+def test_object_of_overlapping_blocks_compiles_with_one_visual_per_block():
+    from workcell import solids
+    from workcell.cell import Workcell
+    from workcell.spatial import translation
+
+    cell = Workcell("cross_cell")
+    m = cell.model
+    solids.box(m, "bar", size=(0.1, 0.02, 0.02))
+    m.create("object", "cross")
+    m.attach("cross", "bar", translation(-0.05, -0.01, 0))
+    m.attach(
+        "cross",
+        "bar",
+        translation(0.01, -0.05, 0)
+        @ np.array([[0, -1, 0, 0], [1, 0, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], dtype=float),
+    )  # the two bars cross at the origin: their meshes overlap
+    cell.add_movable("cross_part", "cross", translation(0, 0, 0.1), density=1000.0)
+    mm = compile_cell(cell).model
+    visuals = [mm.geom(i).name for i in range(mm.ngeom) if ".visual" in mm.geom(i).name]
+    assert sorted(visuals) == ["cross_part.visual0", "cross_part.visual1"]
+    # each bar 0.1 x 0.02 x 0.02 m at 1000 kg/m^3: the overlap is counted in both
+    # meshes travel as STL (float32 vertices): 1e-6 relative
+    assert mm.body_mass[mm.body("cross_part").id] == pytest.approx(
+        2 * 1000.0 * 0.1 * 0.02 * 0.02, rel=1e-6
+    )
+    assert cell.mass("cross_part") == pytest.approx(2 * 1000.0 * 0.1 * 0.02 * 0.02, rel=1e-12)

@@ -121,12 +121,21 @@ def _add_part_geoms(
     density: float,
     assets: dict[str, bytes],
 ) -> None:
-    """Mesh assets of a part, its visual (mass-carrying) geom and collision geoms in ``parent``."""
-    vis = f"{name}.mesh"
-    assets[f"{vis}.stl"] = stl_bytes(model.world_mesh(entity))
-    spec.add_mesh(name=vis, file=f"{vis}.stl", inertia=_EXACT)
+    """Mesh assets of a part, its visual (mass-carrying) geoms and collision geoms in ``parent``.
+
+    An object gets one visual mesh per placed block (each a closed solid; overlapping
+    blocks would make one concatenated mesh that MuJoCo refuses); its mass is the sum of
+    its blocks' masses.
+    """
+    if entity[0] == "object" and len(parts := model.world_parts(entity)) > 1:
+        visuals = [(f"{name}.mesh{k}", f"{name}.visual{k}", p.mesh) for k, p in enumerate(parts)]
+    else:
+        visuals = [(f"{name}.mesh", f"{name}.visual", model.world_mesh(entity))]
+    for vis, _, mesh in visuals:
+        assets[f"{vis}.stl"] = stl_bytes(mesh)
+        spec.add_mesh(name=vis, file=f"{vis}.stl", inertia=_EXACT)
     pieces, convex = _pieces(model, entity)
-    cols = [vis]
+    cols = [v[0] for v in visuals]
     if not convex:
         cols = []
         for i, p in enumerate(pieces):
@@ -136,18 +145,19 @@ def _add_part_geoms(
             cols.append(mname)
     pos, quat = _pos_quat(pose)
     rgba = list(colour)
-    parent.add_geom(
-        name=f"{name}.visual",
-        type=_MESH,
-        meshname=vis,
-        pos=pos,
-        quat=quat,
-        density=density,
-        contype=0,
-        conaffinity=0,
-        group=VISUAL_GROUP,
-        rgba=rgba,
-    )
+    for vis, geom, _ in visuals:
+        parent.add_geom(
+            name=geom,
+            type=_MESH,
+            meshname=vis,
+            pos=pos,
+            quat=quat,
+            density=density,
+            contype=0,
+            conaffinity=0,
+            group=VISUAL_GROUP,
+            rgba=rgba,
+        )
     for i, c in enumerate(cols):
         parent.add_geom(
             name=f"{name}.col{i}",
