@@ -42,9 +42,8 @@ from workcell.files import atomic_write_bytes, atomic_write_text
 from workcell.modeller.model import Model
 from workcell.robots.meshes import convex_pieces, is_convex, stl_bytes
 from workcell.robots.mjcf import (
-    COLLISION_GROUP,
     MESHDIR,
-    VISUAL_GROUP,
+    add_mesh_geoms,
     body_name,
     finger_joint_names,
     gripper_body_name,
@@ -144,33 +143,16 @@ def _add_part_geoms(
             spec.add_mesh(name=mname, file=f"{mname}.stl", inertia=_EXACT)
             cols.append(mname)
     pos, quat = _pos_quat(pose)
-    rgba = list(colour)
-    for vis, geom, _ in visuals:
-        parent.add_geom(
-            name=geom,
-            type=_MESH,
-            meshname=vis,
-            pos=pos,
-            quat=quat,
-            density=density,
-            contype=0,
-            conaffinity=0,
-            group=VISUAL_GROUP,
-            rgba=rgba,
-        )
-    for i, c in enumerate(cols):
-        parent.add_geom(
-            name=f"{name}.col{i}",
-            type=_MESH,
-            meshname=c,
-            pos=pos,
-            quat=quat,
-            density=0.0,
-            contype=1,
-            conaffinity=1,
-            group=COLLISION_GROUP,
-            rgba=[*rgba[:3], 0.5],
-        )
+    add_mesh_geoms(
+        parent,
+        [(geom, vis) for vis, geom, _ in visuals],
+        cols,
+        collision_prefix=name,
+        pos=pos,
+        quat=quat,
+        density=density,
+        rgba=list(colour),
+    )
 
 
 def _set_initial_q(child: mujoco.MjSpec, robot, q: np.ndarray) -> None:  # noqa: ANN001

@@ -52,6 +52,7 @@ __all__ = [
     "MESHDIR",
     "TOOL_SITE",
     "VISUAL_GROUP",
+    "add_mesh_geoms",
     "body_name",
     "export_robot",
     "finger_joint_names",
@@ -196,23 +197,51 @@ def _add_solid(
     vis, col, P = _placed_meshes(robot, block, T, reg, cache)
     pos, quat = _pos_quat(P)
     gname = reg.unique(f"{reg.prefix}{block}")
-    body.add_geom(
-        name=gname,
-        type=_MESH,
-        meshname=vis,
+    add_mesh_geoms(
+        body,
+        [(gname, vis)],
+        col,
+        collision_prefix=gname,
         pos=pos,
         quat=quat,
         density=density,
-        contype=0,
-        conaffinity=0,
-        group=VISUAL_GROUP,
         rgba=rgba,
     )
-    for i, c in enumerate(col):
+
+
+def add_mesh_geoms(
+    body: mujoco.MjsBody,
+    visuals: list[tuple[str, str]],
+    collisions: list[str],
+    *,
+    collision_prefix: str,
+    pos: list[float],
+    quat: list[float],
+    density: float,
+    rgba: list[float],
+) -> None:
+    """The geoms of one solid in ``body``: visual mesh geoms that carry the mass and no
+    contacts (``visuals`` = (geom name, mesh name) pairs, group 2) and massless collision
+    geoms named ``{collision_prefix}.col{i}`` on the ``collisions`` meshes (group 3).
+    ``density`` in kg/m^3; ``pos``/``quat`` place the meshes in the body (m, wxyz)."""
+    for geom, mesh in visuals:
         body.add_geom(
-            name=f"{gname}.col{i}",
+            name=geom,
             type=_MESH,
-            meshname=c,
+            meshname=mesh,
+            pos=pos,
+            quat=quat,
+            density=density,
+            contype=0,
+            conaffinity=0,
+            group=VISUAL_GROUP,
+            rgba=rgba,
+        )
+    for i, mesh in enumerate(collisions):
+        body.add_geom(
+            name=f"{collision_prefix}.col{i}",
+            type=_MESH,
+            meshname=mesh,
             pos=pos,
             quat=quat,
             density=0.0,
