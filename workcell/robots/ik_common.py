@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -314,3 +314,44 @@ def _failure_reason(
     elif best.status in ("stalled", "step vanished"):
         why += f"; {best.status}"
     return why
+
+
+def best_of_attempts(
+    robot: Robot,
+    T_target: Array,
+    attempts_iter: Iterator[tuple[_Attempt, bool]],
+    *,
+    config: str | None,
+    tol_p: float,
+    tol_o: float,
+    method: str,
+    length: float,
+    closest: bool,
+    closed: object,
+    gap: float,
+) -> IKSolution:
+    """Run attempts (each with whether it came from a random seed) until one succeeds.
+
+    The first converged attempt that passes :func:`_finish` (pose, limits, configuration)
+    is the answer. Otherwise the best attempt (least ``position + length * orientation``
+    error, or the closest position when ``closest``) is returned with ``success=False``
+    and the reason. Iterations are summed over all attempts.
+    """
+    attempts: list[_Attempt] = []
+    rejected: list[str] = []
+    total = n_random = 0
+    for a, is_random in attempts_iter:
+        n_random += is_random
+        total += a.iterations
+        attempts.append(a)
+        if a.status == "converged":
+            sol = _finish(robot, T_target, a, config, tol_p, tol_o, total, method)
+            if sol.success:
+                return sol
+            if sol.config is not None and config is not None and sol.config != config:
+                rejected.append(sol.config)
+    best = min(attempts, key=lambda a: a.merit(length))
+    if closest:
+        best = _closest_position(robot, attempts, T_target)
+    reason = _failure_reason(robot, best, attempts, config, rejected, n_random, closed, gap, tol_p)
+    return _finish(robot, T_target, best, config, tol_p, tol_o, total, method, reason)

@@ -21,12 +21,10 @@ from workcell.robots.ik_common import (
     Array,
     _Attempt,
     _closed_form_seeds,
-    _closest_position,
-    _failure_reason,
-    _finish,
     _length_scale,
     _random_q,
     _reach_gap,
+    best_of_attempts,
 )
 from workcell.robots.ik_newton import newton_gauss_context
 from workcell.robots.mjcf import TOOL_SITE, kinematic_model
@@ -215,25 +213,24 @@ def _solve_mink(
         closed is not None and all(config is not None and c != config for _, c in closed[0])
     ):
         budget = min(budget, UNREACHABLE_RESTARTS)
-    attempts: list[_Attempt] = []
-    rejected_configs: list[str] = []
-    total = n_random = 0
-    with ctx.lock:
-        for q_seed, kind in _mink_seeds(robot, q_start, closed, config, budget, rng):
-            n_random += kind == "random"
-            a = _mink_attempt(ctx, robot, q_seed, T_target, tol_p, tol_o, max_iterations, kind)
-            total += a.iterations
-            attempts.append(a)
-            if a.status == "converged":
-                sol = _finish(robot, T_target, a, config, tol_p, tol_o, total, "mink")
-                if sol.success:
-                    return sol
-                if sol.config is not None and config is not None and sol.config != config:
-                    rejected_configs.append(sol.config)
-    best = min(attempts, key=lambda a: a.merit(ctx.length))
-    if out_of_reach:
-        best = _closest_position(robot, attempts, T_target)
-    reason = _failure_reason(
-        robot, best, attempts, config, rejected_configs, n_random, closed, gap, tol_p
-    )
-    return _finish(robot, T_target, best, config, tol_p, tol_o, total, "mink", reason)
+    seeds = _mink_seeds(robot, q_start, closed, config, budget, rng)
+    with ctx.lock:  # the attempts share the cached Configuration
+        return best_of_attempts(
+            robot,
+            T_target,
+            (
+                (
+                    _mink_attempt(ctx, robot, q, T_target, tol_p, tol_o, max_iterations, kind),
+                    kind == "random",
+                )
+                for q, kind in seeds
+            ),
+            config=config,
+            tol_p=tol_p,
+            tol_o=tol_o,
+            method="mink",
+            length=ctx.length,
+            closest=out_of_reach,
+            closed=closed,
+            gap=gap,
+        )

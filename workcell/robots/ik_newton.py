@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,13 +20,11 @@ from workcell.robots.ik_common import (
     UNREACHABLE_RESTARTS,
     Array,
     _Attempt,
-    _closest_position,
-    _failure_reason,
-    _finish,
     _length_scale,
     _pose_errors,
     _random_q,
     _reach_gap,
+    best_of_attempts,
 )
 from workcell.robots.robot import IKSolution, Robot
 
@@ -260,27 +259,25 @@ def _solve_newton_gauss(
     starts = sorted(ctx.starts, key=lambda s: (prefer is not None and s[2] != prefer, s[1]))
     if q0 is not None:  # the caller's q0 after the well-conditioned starts
         starts.append((q0, math.nan, None))
-    attempts: list[_Attempt] = []
-    rejected: list[str] = []
-    total = 0
-    n_random = 0
-    for i in range(budget + 1):
-        if i < len(starts):
-            q_s, kind = starts[i][0], f"start {i} (condition number {starts[i][1]:.3g})"
-        else:
-            q_s, kind = _random_q(robot, rng), "random"
-            n_random += 1
-        a = problem.path(q_s, T_target, kind)
-        total += a.iterations
-        attempts.append(a)
-        if a.status == "converged":
-            sol = _finish(robot, T_target, a, config, tol_p, tol_o, total, "newton-gauss")
-            if sol.success:
-                return sol
-            if sol.config is not None and config is not None and sol.config != config:
-                rejected.append(sol.config)
-    best = min(attempts, key=lambda a: a.merit(ctx.length))
-    if gap > tol_p:
-        best = _closest_position(robot, attempts, T_target)
-    reason = _failure_reason(robot, best, attempts, config, rejected, n_random, None, gap, tol_p)
-    return _finish(robot, T_target, best, config, tol_p, tol_o, total, "newton-gauss", reason)
+
+    def tries() -> Iterator[tuple[_Attempt, bool]]:
+        for i in range(budget + 1):
+            if i < len(starts):
+                q_s, kind = starts[i][0], f"start {i} (condition number {starts[i][1]:.3g})"
+            else:
+                q_s, kind = _random_q(robot, rng), "random"
+            yield problem.path(q_s, T_target, kind), i >= len(starts)
+
+    return best_of_attempts(
+        robot,
+        T_target,
+        tries(),
+        config=config,
+        tol_p=tol_p,
+        tol_o=tol_o,
+        method="newton-gauss",
+        length=ctx.length,
+        closest=gap > tol_p,
+        closed=None,
+        gap=gap,
+    )
