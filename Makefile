@@ -22,6 +22,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python scripts/bench_modeller.py
 	$(BIN)/python scripts/bench_kinematics.py
+	$(BIN)/python scripts/bench_sim.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info
