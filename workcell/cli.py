@@ -3,13 +3,19 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-__all__ = ["main"]
+__all__ = ["SUBCOMMAND_MODULES", "main"]
+
+# Modules that add their own subcommands: each has ``register(sub)``, which adds its
+# parsers to the ``argparse`` subparsers ``sub`` and sets ``func`` (args -> exit code).
+# Keep their top-level imports light: ``workcell --help`` imports every one of them.
+SUBCOMMAND_MODULES: tuple[str, ...] = ()
 
 
 def _demo_solids(args: argparse.Namespace) -> int:
@@ -131,6 +137,8 @@ def main(argv: list[str] | None = None) -> int:
     export.add_argument("cell", metavar="CELL.json", help="a cell saved by Workcell.save")
     export.add_argument("--out", metavar="DIR", required=True, help="output folder")
     export.set_defaults(func=_export)
+    for module in SUBCOMMAND_MODULES:
+        importlib.import_module(module).register(sub)
     args = parser.parse_args(argv)
     try:
         return args.func(args)
