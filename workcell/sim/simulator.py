@@ -36,6 +36,34 @@ in the same manner as in the path simulation approach, but is stored in the fram
 take). The *wall clock* is a stopwatch that runs while the simulator works (computing,
 showing or replaying frames); both clocks are kept on every frame of the timeline.
 
+Cartesian commands (thesis §4.5; see :mod:`workcell.sim.cartesian`):
+``move_end_effector(robot, T, config)`` solves IK for the world tool pose T and moves
+linearly in joints like ``move_joints_absolute``; ``move_straight_line(robot, T, step)``
+samples the Cartesian line, solves IK at each sample warm-started at the previous one and
+moves linearly in joints between samples (path-mode timing in every mode), checking the
+joint jumps and the tool's deviation from the line (``line_tolerance``).
+
+Grasping (§4.5; :mod:`workcell.sim.grasp`): ``close_gripper`` runs the thesis's three
+tests on every movable part; the first that passes is grasped: the weld equality of that
+gripper and part is activated with the captured relative pose (``eq_data``), the fingers
+close on the part, and from then on the part's free joint is written every frame as
+gripper pose x relative pose (exact carry; the timeline stores it). ``open_gripper``
+releases it where it is. A part may be held by two robots at once (a handoff): the first
+holder carries it and may not move while the second also holds it; when the first opens,
+the second carries it.
+
+Collisions (``check_collisions``, default on): after each frame's ``mj_kinematics``,
+``mj_collision`` runs and every pair of things overlapping by more than
+``contact_tolerance`` (m) that was not overlapping in the previous frame becomes a
+``collision`` event (time, pair, depth); a held part against its own gripper is skipped.
+``stop_on_collision`` raises :class:`CollisionError` at the first one (the command is
+undone). :meth:`Simulator.clearance` gives the minimum distance between two named things.
+
+Profiles (``profile``; :mod:`workcell.sim.profiles`): the thesis's constant speed
+("linear"), or, beyond the thesis, "trapezoid" (``acceleration`` rad/s^2) or "quintic",
+for joint moves and ``move_end_effector``; the simulated clock then runs by the
+profile's duration.
+
 Errors: every command validates first (unknown robot: ProgramError listing the robots;
 target outside the limits: JointLimitError naming the joint and its range; bad speed or
 vector: ProgramError) and changes nothing when it fails; an exception while frames are
@@ -48,7 +76,7 @@ import math
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, NamedTuple
 
 import mujoco
 import numpy as np
@@ -56,16 +84,36 @@ from numpy.typing import ArrayLike, NDArray
 
 from workcell.cell.compile import CompiledCell, compile_cell
 from workcell.cell.workcell import Workcell
-from workcell.errors import JointLimitError, ProgramError
+from workcell.errors import (
+    CollisionError,
+    GraspError,
+    JointLimitError,
+    ProgramError,
+    UnreachableError,
+)
+from workcell.sim import cartesian, profiles
+from workcell.sim.contacts import DEFAULT_TOLERANCE, ContactMonitor, Penetration
+from workcell.sim.grasp import PartBox, describe_failure, grasp_candidates
 from workcell.sim.timeline import DEFAULT_MEMORY_LIMIT, Event, Timeline
+from workcell.spatial import invert, pos_quat_from_pose
 
-__all__ = ["JOINT_BY_JOINT_CLOCKS", "MODES", "Simulator", "step_times"]
+__all__ = ["JOINT_BY_JOINT_CLOCKS", "MODES", "Hold", "Simulator", "step_times"]
 
 MODES = ("path", "joint-by-joint", "playback")
 JOINT_BY_JOINT_CLOCKS = ("thesis", "sequential")
 _REMAINDER_TOL = 1e-9  # a remainder below this fraction of dT is no step
 
 Array = NDArray[np.float64]
+
+
+class Hold(NamedTuple):
+    """A grasp: ``part`` held by a robot's gripper at relative pose ``relative`` (4x4, the
+    part's body frame in the gripper body's frame), as position (3,) and wxyz quaternion."""
+
+    part: str
+    relative: Array
+    pos: Array
+    quat: Array
 
 
 def step_times(T: float, dt: float) -> Array:
@@ -104,7 +152,11 @@ class Simulator:
     ``joint_by_joint_clock``: "thesis" or "sequential"; ``compiled``: an already compiled
     cell (default: compile ``cell``); ``memory_limit`` (bytes, None: none) and
     ``spill_dir``: frames beyond the limit spill to a temporary file (see
-    :class:`~workcell.sim.timeline.Timeline`).
+    :class:`~workcell.sim.timeline.Timeline`). ``check_collisions``,
+    ``stop_on_collision`` and ``contact_tolerance`` (m): collision events (module doc);
+    ``profile`` ("linear", "trapezoid", "quintic") and ``acceleration`` (rad/s^2, for
+    "trapezoid"): joint-move time profiles; ``line_tolerance`` (m): the largest
+    deviation of a straight line's frames from the line.
     """
 
     def __init__(
@@ -118,6 +170,12 @@ class Simulator:
         compiled: CompiledCell | None = None,
         memory_limit: int | None = DEFAULT_MEMORY_LIMIT,
         spill_dir: str | None = None,
+        check_collisions: bool = True,
+        stop_on_collision: bool = False,
+        contact_tolerance: float = DEFAULT_TOLERANCE,
+        profile: str = "linear",
+        acceleration: float = 2.0,
+        line_tolerance: float = 1e-3,
     ) -> None:
         if mode not in MODES:
             raise ProgramError(f"unknown simulation mode {mode!r}; valid: {', '.join(MODES)}")
@@ -128,8 +186,24 @@ class Simulator:
                 f"unknown joint_by_joint_clock {joint_by_joint_clock!r}; "
                 f"valid: {', '.join(JOINT_BY_JOINT_CLOCKS)}"
             )
+        if profile not in profiles.PROFILES:
+            raise ProgramError(
+                f"unknown profile {profile!r}; valid: {', '.join(profiles.PROFILES)}"
+            )
+        for what, v in (
+            ("acceleration", acceleration),
+            ("contact_tolerance", contact_tolerance),
+            ("line_tolerance", line_tolerance),
+        ):
+            if not (_finite_number(v) and v > 0):
+                raise ProgramError(f"{what} must be a finite number > 0, got {v!r}")
         self.cell = cell
         self.mode = mode
+        self.profile = profile
+        self.acceleration = float(acceleration)
+        self.line_tolerance = float(line_tolerance)
+        self.check_collisions = bool(check_collisions)
+        self.stop_on_collision = bool(stop_on_collision)
         self.dt = float(dt)
         self.realtime = bool(realtime)
         self.joint_by_joint_clock = joint_by_joint_clock
@@ -147,11 +221,39 @@ class Simulator:
             )
             self._site[name] = self.model.site(self.compiled.tool_sites[name]).id
             self._speed[name] = float(placement.robot.nominal_speed)
-        self._part_body = {p: self.model.body(b).id for p, b in self.compiled.part_bodies.items()}
+        m, cc = self.model, self.compiled
+        self._part_body = {p: m.body(b).id for p, b in cc.part_bodies.items()}
+        self._free_adr = {p: int(m.jnt_qposadr[m.joint(j).id]) for p, j in cc.free_joints.items()}
+        self._fingers: dict[str, NDArray[np.intp]] = {
+            r: np.array([m.jnt_qposadr[m.joint(j).id] for j in js], dtype=np.intp)
+            for r, js in cc.finger_joints.items()
+        }
+        self._gripper: dict[str, int] = {r: m.body(b).id for r, b in cc.gripper_bodies.items()}
+        self._gripper_tree = {
+            r: {b for b in range(m.nbody) if self._in_subtree(b, g)}
+            for r, g in self._gripper.items()
+        }
+        self._weld = {k: m.equality(e).id for k, e in cc.welds.items()}
+        self._boxes = {p: cell.bounding_box(p) for p in cell.movable_parts}
+        self._centroids = {p: cell.centroid_frame(p)[:3, 3] for p in cell.movable_parts}
+        self._holds: dict[str, Hold] = {}
+        self._holders: dict[str, list[str]] = {p: [] for p in cell.movable_parts}
+        self.contacts = ContactMonitor(cc, contact_tolerance)
+        self._touching: set[tuple[str, str]] = set()
         self.sim_time = 0.0
         self._wall = 0.0
         self.timeline = Timeline(self.model.nq, memory_limit=memory_limit, spill_dir=spill_dir)
         self.timeline.append(0.0, 0.0, self.data.qpos)
+        if self.check_collisions:
+            mujoco.mj_collision(m, self.data)
+            self._contact_events(0.0, self.contacts.penetrations(self.data), stop=False)
+
+    def _in_subtree(self, body: int, root: int) -> bool:
+        while body > 0:
+            if body == root:
+                return True
+            body = int(self.model.body_parentid[body])
+        return False
 
     # ------------------------------------------------------------------ read-back
     @property
@@ -199,6 +301,39 @@ class Simulator:
         """World position (m) of each movable part's body frame, by name."""
         return {p: self.data.xpos[b].tolist() for p, b in self._part_body.items()}
 
+    def held(self, robot: str) -> str | None:
+        """The part the robot's gripper holds, or None."""
+        h = self._holds.get(self._robot(robot))
+        return None if h is None else h.part
+
+    def part_pose(self, part: str) -> Array:
+        """World pose (4x4) of a movable part's body frame."""
+        if part not in self._part_body:
+            known = ", ".join(self._part_body) or "none"
+            raise ProgramError(f"no movable part {part!r}; movable parts: {known}")
+        b = self._part_body[part]
+        T = np.eye(4)
+        T[:3, :3] = self.data.xmat[b].reshape(3, 3)
+        T[:3, 3] = self.data.xpos[b]
+        return T
+
+    def gripper_pose(self, robot: str) -> Array:
+        """World pose (4x4) of the robot's gripper body (the weld's body1)."""
+        b = self._gripper_id(self._robot(robot), "gripper_pose")
+        T = np.eye(4)
+        T[:3, :3] = self.data.xmat[b].reshape(3, 3)
+        T[:3, 3] = self.data.xpos[b]
+        return T
+
+    def clearance(self, a: str, b: str) -> float:
+        """Minimum distance (m) between two things now; negative: penetration depth.
+
+        A thing is a robot (all its links and gripper), a link or gripper body
+        (``"puma_1.link3"``), a movable or static part, or ``"ground"``; the distance is
+        MuJoCo's ``mj_geomDistance`` between their convex collision pieces.
+        """
+        return self.contacts.clearance(self.data, a, b)[0]
+
     def summary(self) -> dict[str, Any]:
         """The DESIGN.md ``workcell demo --json`` fields this slice knows (``mjcf`` None)."""
         return {
@@ -237,6 +372,147 @@ class Simulator:
         name = self._robot(robot)
         d = self._vector(name, dq, "move_joints_relative", "dq")
         self._move(name, self.joints(name) + d, "move_joints_relative")
+
+    def set_mode(self, mode: str) -> None:
+        """Switch the simulation mode for the commands that follow."""
+        if mode not in MODES:
+            raise ProgramError(f"unknown simulation mode {mode!r}; valid: {', '.join(MODES)}")
+        self.mode = mode
+        self.timeline.add_event(self.sim_time, None, "mode", f"mode {mode}")
+
+    def move_end_effector(self, robot: str, T: ArrayLike, config: str | None = None) -> None:
+        """Move the tool to the world pose ``T`` (4x4, m): IK, then linear in joints.
+
+        ``config``: Puma configuration letters to require (e.g. "ru"); default: the
+        in-limit solution nearest the current joints. Raises UnreachableError saying why.
+        """
+        name = self._robot(robot)
+        target = cartesian.world_target(T, "move_end_effector", name)
+        try:
+            q = cartesian.solve_pose(self.cell.robots[name], target, self.joints(name), config)
+        except UnreachableError as exc:
+            raise UnreachableError(f"move_end_effector '{name}': {exc}") from exc
+        self._move(name, q, "move_end_effector")
+
+    def move_straight_line(
+        self, robot: str, T: ArrayLike, step: float = 0.005, *, max_jump: float = math.radians(10)
+    ) -> None:
+        """Move the tool along the straight line to the world pose ``T`` (4x4, m).
+
+        Samples at most ``step`` (m) apart (orientation slerped, held when unchanged),
+        IK at each warm-started at the previous, linear in joints between samples; a
+        sample out of reach, a joint jump above ``max_jump`` (rad) or frames straying
+        more than ``line_tolerance`` from the line raise UnreachableError saying where.
+        """
+        name = self._robot(robot)
+        target = cartesian.world_target(T, "move_straight_line", name)
+        for what, v in (("step", step), ("max_jump", max_jump)):
+            if not (_finite_number(v) and v > 0):
+                raise ProgramError(f"move_straight_line '{name}': {what} must be > 0, got {v!r}")
+        placement = self.cell.robots[name]
+        start = self.tool_pose(name)
+        q0 = self.joints(name)
+        try:
+            Qw, _ = cartesian.line_waypoints(
+                placement, q0, start, target, step=float(step), max_jump=float(max_jump)
+            )
+        except UnreachableError as exc:
+            raise UnreachableError(f"move_straight_line '{name}': {exc}") from exc
+        times, Qr = self._plan_waypoints(name, q0, Qw)
+        dev, i = cartesian.line_deviation(placement, Qr, start[:3, 3], target[:3, 3])
+        if dev > self.line_tolerance:
+            raise UnreachableError(
+                f"move_straight_line '{name}': the tool strays {dev * 1e3:.3g} mm from the "
+                f"line at t = {times[i]:.4g} s (line_tolerance {self.line_tolerance * 1e3:.3g} "
+                f"mm); use a smaller step"
+            )
+        length = float(np.linalg.norm(target[:3, 3] - start[:3, 3]))
+        self._run(
+            name, times, Qr, "move_straight_line", f"{length * 1e3:.4g} mm line, {len(Qw)} samples"
+        )
+
+    def close_gripper(
+        self, robot: str, max_distance: float = 0.02, max_angle: float = math.radians(10)
+    ) -> str:
+        """Close the robot's gripper; grasp the first part passing the thesis's tests.
+
+        ``max_distance`` (m) from the tool-centre point to the part's centroid,
+        ``max_angle`` (rad) between the tool's z axis and a box axis; the part's width
+        across the grasp must fit the opening. Returns the part's name; raises
+        GraspError naming the nearest candidate and the test it failed.
+        """
+        name = self._robot(robot)
+        self._gripper_id(name, "close_gripper")
+        for what, v in (("max_distance", max_distance), ("max_angle", max_angle)):
+            if not (_finite_number(v) and v >= 0):
+                raise ProgramError(f"close_gripper '{name}': {what} must be >= 0, got {v!r}")
+        if name in self._holds:
+            raise GraspError(f"close_gripper '{name}': already holds '{self._holds[name].part}'")
+        gripper = self.cell.robots[name].robot.gripper
+        opening = float(gripper.max_opening)
+        boxes = []
+        for p in self._part_body:
+            if name in self._holders[p]:
+                continue
+            P = self.part_pose(p)
+            lo, hi = self._boxes[p]
+            boxes.append(
+                PartBox(p, P[:3, :3], (hi - lo) / 2.0, P[:3, :3] @ self._centroids[p] + P[:3, 3])
+            )
+        tests = dict(opening=opening, max_distance=float(max_distance), max_angle=float(max_angle))
+        cands = grasp_candidates(self.tool_pose(name), boxes, **tests)
+        chosen = next((c for c in cands if c.failed is None), None)
+        if chosen is None:
+            raise GraspError(describe_failure(name, cands, **tests))
+        part = chosen.part
+        G = self.gripper_pose(name)
+        rel = invert(G) @ self.part_pose(part)
+        pos, quat = pos_quat_from_pose(rel)
+        with self._transaction():
+            e = self._weld[(name, part)]
+            self.model.eq_data[e, 3:6] = pos
+            self.model.eq_data[e, 6:10] = quat
+            self.data.eq_active[e] = 1
+            self._holds[name] = Hold(part, rel, pos, quat)
+            self._holders[part].append(name)
+            self._update_exclusions()
+            self._set_fingers(name, min(chosen.width, opening) / 2.0)
+            self.timeline.add_event(
+                self.sim_time,
+                name,
+                "grasp",
+                f"grasp '{part}': axis {math.degrees(chosen.angle):.3g} deg, width "
+                f"{chosen.width * 1e3:.4g} mm, distance {chosen.distance * 1e3:.3g} mm",
+            )
+        return part
+
+    def open_gripper(self, robot: str) -> str | None:
+        """Open the robot's gripper; release the part it holds (returned; None if empty).
+
+        A released part stays where it is, unless another robot holds it too (a handoff):
+        that robot carries it from now on.
+        """
+        name = self._robot(robot)
+        self._gripper_id(name, "open_gripper")
+        hold = self._holds.get(name)
+        with self._transaction():
+            if hold is not None:
+                del self._holds[name]
+                self._holders[hold.part].remove(name)
+                self.data.eq_active[self._weld[(name, hold.part)]] = 0
+                self._update_exclusions()
+            travel = float(self.cell.robots[name].robot.gripper.finger_travel)
+            self._set_fingers(name, travel)
+            if hold is None:
+                self.timeline.add_event(self.sim_time, name, "open", "open_gripper: nothing held")
+            else:
+                others = self._holders[hold.part]
+                to = f", now carried by '{others[0]}'" if others else ""
+                where = ", ".join(f"{v:.4g}" for v in self.part_pose(hold.part)[:3, 3])
+                self.timeline.add_event(
+                    self.sim_time, name, "release", f"release '{hold.part}' at ({where}) m{to}"
+                )
+        return None if hold is None else hold.part
 
     def wait(self, seconds: float) -> None:
         """Let ``seconds`` of simulated time pass with nothing moving (one frame at the end)."""
@@ -308,17 +584,51 @@ class Simulator:
             )
         return a
 
+    def _gripper_id(self, name: str, command: str) -> int:
+        if name not in self._gripper:
+            raise ProgramError(
+                f"{command} '{name}': the robot has no gripper; robots with one: "
+                f"{', '.join(self._gripper) or 'none'}"
+            )
+        return self._gripper[name]
+
+    def _update_exclusions(self) -> None:
+        """A held part never collides with the gripper(s) holding it."""
+        ex: set[tuple[int, int]] = set()
+        for robot, hold in self._holds.items():
+            ex |= self.contacts.exclude(self._gripper_tree[robot], {self._part_body[hold.part]})
+        self.contacts.excluded = ex
+
+    def _set_fingers(self, name: str, q_each: float) -> None:
+        """Put both fingers at ``q_each`` (m from closed): one frame, no simulated time."""
+        row = self.data.qpos.copy()
+        row[self._fingers[name]] = q_each
+        self._emit(np.array([self.sim_time]), row[None, :], [], name)
+
+    def _carried(self, name: str) -> list[tuple[int, int, Array, Array]]:
+        """(gripper body, free-joint qpos address, relative pos, quat) of what ``name`` carries."""
+        hold = self._holds.get(name)
+        if hold is None:
+            return []
+        others = [r for r in self._holders[hold.part] if r != name]
+        if others:
+            raise ProgramError(
+                f"'{name}' cannot move: '{hold.part}' is also held by '{others[0]}'; "
+                f"open one of the two grippers first"
+            )
+        return [(self._gripper[name], self._free_adr[hold.part], hold.pos, hold.quat)]
+
     def _plan(self, name: str, q0: Array, target: Array) -> tuple[Array, Array]:
         """Simulated times (k,) and joint values (k, dof) of a move, last row = target."""
-        speed, dt = self._speed[name], self.dt
+        speed, dt, prof, acc = self._speed[name], self.dt, self.profile, self.acceleration
         delta = target - q0
         big = float(np.max(np.abs(delta))) if len(delta) else 0.0
         if big == 0.0:
             return np.empty(0), np.empty((0, len(q0)))
         if self.mode != "joint-by-joint":  # path and playback: eq. 4.27, 4.28
-            T = big / speed
+            T = profiles.duration(prof, big, speed, acc)
             t = step_times(T, dt)
-            Q = q0 + np.outer(t / T, delta)
+            Q = q0 + np.outer(profiles.progress(prof, t, T, big, speed, acc), delta)
             Q[-1] = target
             return self.sim_time + t, Q
         times, rows = [], []
@@ -326,10 +636,11 @@ class Simulator:
         clock = self.sim_time
         fastest = int(np.argmax(np.abs(delta)))
         for i in np.flatnonzero(delta):
-            Ti = abs(delta[i]) / speed
+            di = abs(float(delta[i]))
+            Ti = profiles.duration(prof, di, speed, acc)
             t = step_times(Ti, dt)
             Q = np.repeat(q[None, :], len(t), axis=0)
-            Q[:, i] = q0[i] + delta[i] * (t / Ti)
+            Q[:, i] = q0[i] + delta[i] * profiles.progress(prof, t, Ti, di, speed, acc)
             Q[-1, i] = target[i]
             q[i] = target[i]
             if self.joint_by_joint_clock == "sequential" or i == fastest:
@@ -340,29 +651,64 @@ class Simulator:
             rows.append(Q)
         return np.concatenate(times), np.concatenate(rows)
 
+    def _plan_waypoints(self, name: str, q0: Array, Qw: Array) -> tuple[Array, Array]:
+        """Path-mode frames through joint waypoints Qw (k, dof), linear between them."""
+        speed, dt = self._speed[name], self.dt
+        times, rows = [np.empty(0)], [np.empty((0, len(q0)))]
+        clock, prev = self.sim_time, q0
+        for q in Qw:
+            d = q - prev
+            big = float(np.max(np.abs(d)))
+            if big == 0.0:
+                continue
+            T = big / speed
+            t = step_times(T, dt)
+            R = prev + np.outer(t / T, d)
+            R[-1] = q
+            times.append(clock + t)
+            rows.append(R)
+            clock += T
+            prev = q
+        return np.concatenate(times), np.concatenate(rows)
+
     def _move(self, name: str, target: Array, command: str) -> None:
         placement = self.cell.robots[name]
         try:
             placement.robot.check_limits(target)
         except JointLimitError as exc:
             raise JointLimitError(f"{command} '{name}': target refused: {exc}") from exc
-        q0 = self.joints(name)
-        times, Qr = self._plan(name, q0, target)
+        times, Qr = self._plan(name, self.joints(name), target)
+        deg = ", ".join(f"{v:.6g}" for v in np.degrees(target))
+        self._run(name, times, Qr, command, f"to ({deg}) deg")
+
+    def _run(self, name: str, times: Array, Qr: Array, command: str, detail: str) -> None:
+        """Emit a robot's planned frames (carrying what it holds) and log the move event."""
+        carried = self._carried(name) if len(times) else []
         Q = np.repeat(self.data.qpos[None, :], len(times), axis=0)
         Q[:, self._qadr[name]] = Qr
         t_before = self.sim_time
         with self._transaction():
-            self._emit(times, Q)
-            deg = ", ".join(f"{v:.6g}" for v in np.degrees(target))
+            self._emit(times, Q, carried, name)
             self.timeline.add_event(
                 self.sim_time,
                 name,
                 "move",
-                f"{command} to ({deg}) deg: {len(times)} frames, {self.sim_time - t_before:.6g} s",
+                f"{command} {detail}: {len(times)} frames, {self.sim_time - t_before:.6g} s",
             )
 
-    def _emit(self, times: Array, Q: Array) -> None:
-        """Apply (path, joint-by-joint) or store (playback) frames; advance both clocks."""
+    def _emit(
+        self,
+        times: Array,
+        Q: Array,
+        carried: list[tuple[int, int, Array, Array]],
+        mover: str | None = None,
+    ) -> None:
+        """Apply (path, joint-by-joint) or store (playback) frames; advance both clocks.
+
+        Carried parts are posed at gripper x relative pose in every frame (their columns
+        of Q are overwritten); with collision checks every frame is computed and checked
+        (a collision involving ``mover``, the robot that moves, is charged to it).
+        """
         k = len(times)
         if k == 0:
             return
@@ -370,30 +716,89 @@ class Simulator:
         clock = time.perf_counter
         w0 = self._wall
         c0 = clock()
-        if self.mode == "playback":
+        check = self.check_collisions
+        if self.mode == "playback" and not carried and not check:
             walls = np.full(k, clock())
             d.qpos[:] = Q[-1]
             mujoco.mj_kinematics(m, d)
         else:
             walls = np.empty(k)
-            qpos, kin = d.qpos, mujoco.mj_kinematics
+            qpos, kin, collide, mul = (
+                d.qpos,
+                mujoco.mj_kinematics,
+                mujoco.mj_collision,
+                mujoco.mju_mulPose,
+            )
+            xpos, xquat = d.xpos, d.xquat
+            p, q = np.empty(3), np.empty(4)
             for j in range(k):
                 qpos[:] = Q[j]
                 kin(m, d)
+                if carried:
+                    for g, adr, rp, rq in carried:
+                        mul(p, q, xpos[g], xquat[g], rp, rq)
+                        qpos[adr : adr + 3] = p
+                        qpos[adr + 3 : adr + 7] = q
+                        Q[j, adr : adr + 7] = qpos[adr : adr + 7]
+                    kin(m, d)
+                if check:
+                    collide(m, d)
+                    if d.ncon or self._touching:
+                        pens = self.contacts.penetrations(d)
+                        self._contact_events(float(times[j]), pens, mover=mover)
                 walls[j] = clock()
         self.timeline.extend(times, w0 + (walls - c0), Q)
         self.sim_time = float(times[-1])
         self._wall = w0 + (clock() - c0)
 
+    def _contact_events(
+        self, t: float, pens: list[Penetration], *, stop: bool = True, mover: str | None = None
+    ) -> None:
+        """Log the pairs that start overlapping at ``t``; raise if stopping on collisions."""
+        if not pens and not self._touching:
+            return
+        now = {(a, b) for a, b, _ in pens}
+        onset = [p for p in pens if (p[0], p[1]) not in self._touching]
+        self._touching = now
+        for a, b, depth in onset:
+            involved = [self.contacts.robot_of(a), self.contacts.robot_of(b)]
+            robot = mover if mover in involved else (involved[0] or involved[1])
+            detail = f"{a} with {b}: depth {depth * 1e3:.3g} mm"
+            self.timeline.add_event(t, robot, "collision", detail)
+            if stop and self.stop_on_collision:
+                raise CollisionError(f"collision at t = {t:.6g} s: {detail}")
+
     @contextmanager
     def _transaction(self) -> Iterator[None]:
-        """Undo everything (joints, clocks, speeds, timeline) if the body raises."""
+        """Undo everything (joints, parts, grasps, clocks, speeds, timeline) if the body raises."""
         qpos = self.data.qpos.copy()
-        saved = (self.sim_time, self._wall, dict(self._speed), self.timeline.mark())
+        saved = (
+            self.sim_time,
+            self._wall,
+            dict(self._speed),
+            self.timeline.mark(),
+            dict(self._holds),
+            {p: list(r) for p, r in self._holders.items()},
+            set(self._touching),
+            set(self.contacts.excluded),
+            self.data.eq_active.copy(),
+            self.model.eq_data.copy(),
+        )
         try:
             yield
         except BaseException:
-            self.sim_time, self._wall, self._speed, mark = saved
+            (
+                self.sim_time,
+                self._wall,
+                self._speed,
+                mark,
+                self._holds,
+                self._holders,
+                self._touching,
+                self.contacts.excluded,
+                self.data.eq_active[:],
+                self.model.eq_data[:],
+            ) = saved
             self.timeline.truncate(mark)
             self.data.qpos[:] = qpos
             mujoco.mj_kinematics(self.model, self.data)

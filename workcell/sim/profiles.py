@@ -1,0 +1,60 @@
+"""Time profiles of a joint-space motion: the thesis's constant speed and two smoother ones.
+
+A motion covers ``distance`` (rad or m, the largest joint motion) with peak speed
+``speed`` (rad/s); every joint follows the same normalised progress s(t) in [0, 1]:
+
+- ``"linear"`` (thesis eq. 4.27): s = t / T, T = distance / speed; the speed jumps at the
+  ends.
+- ``"trapezoid"``: constant acceleration ``acceleration`` (rad/s^2) up to ``speed``,
+  cruise, constant deceleration; T = distance / speed + speed / acceleration, or, when
+  the motion is too short to reach the speed, a triangle with T = 2 sqrt(distance /
+  acceleration).
+- ``"quintic"``: s = 10 tau^3 - 15 tau^4 + 6 tau^5 (tau = t / T), zero speed and
+  acceleration at both ends; T = 1.875 distance / speed so its peak speed is ``speed``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["PROFILES", "duration", "progress"]
+
+PROFILES = ("linear", "trapezoid", "quintic")
+Array = NDArray[np.float64]
+
+
+def duration(profile: str, distance: float, speed: float, acceleration: float) -> float:
+    """Duration (s) of a motion of ``distance`` at peak ``speed`` (see the module doc)."""
+    if distance <= 0:
+        return 0.0
+    if profile == "linear":
+        return distance / speed
+    if profile == "quintic":
+        return 1.875 * distance / speed
+    if distance >= speed * speed / acceleration:
+        return distance / speed + speed / acceleration
+    return 2.0 * math.sqrt(distance / acceleration)
+
+
+def progress(
+    profile: str, t: Array, T: float, distance: float, speed: float, acceleration: float
+) -> Array:
+    """Normalised progress s(t) in [0, 1] at times ``t`` (s) in [0, T] (module doc)."""
+    t = np.clip(np.asarray(t, dtype=np.float64), 0.0, T)
+    if profile == "linear":
+        return t / T
+    if profile == "quintic":
+        tau = t / T
+        return tau**3 * (10.0 + tau * (-15.0 + 6.0 * tau))
+    a = acceleration
+    v = min(speed, math.sqrt(distance * a))  # the peak speed actually reached
+    ta = v / a  # acceleration phase (s)
+    x = np.where(
+        t < ta,
+        0.5 * a * t * t,
+        np.where(t <= T - ta, 0.5 * a * ta * ta + v * (t - ta), distance - 0.5 * a * (T - t) ** 2),
+    )
+    return np.clip(x / distance, 0.0, 1.0)
