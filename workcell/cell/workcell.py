@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, ModelError, WorkcellError
 from workcell.files import atomic_write_text
 from workcell.modeller.model import Model, check_colour
@@ -176,10 +177,6 @@ def _vec3(value: object, what: str) -> Array:
     return v
 
 
-def _number(value: object) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
-
-
 def build_robot(builtin: str, gripper: Mapping[str, Any] | None) -> Robot:
     """The built-in robot ``builtin`` with a parallel gripper of ``gripper`` parameters (or none)."""
     if builtin not in BUILTIN_ROBOTS:
@@ -322,7 +319,7 @@ class Workcell:
         what = f"movable part '{name}'"
         ent = self._entity(entity, what)
         T = as_transform(np.eye(4) if pose is None else pose, rigid=True, name=f"{what} pose")
-        if not (_number(density) and density > 0):
+        if not (is_finite_number(density) and density > 0):
             raise GeometryError(
                 f"{what}: density must be a positive number (kg/m^3), got {density!r}"
             )
@@ -404,7 +401,7 @@ class Workcell:
         t = _vec3(target, f"{what} target")
         if np.linalg.norm(p - t) < 1e-9:
             raise GeometryError(f"{what}: target must differ from position, both are {p.tolist()}")
-        if not (_number(fovy) and 0 < fovy < 180):
+        if not (is_finite_number(fovy) and 0 < fovy < 180):
             raise GeometryError(f"{what}: fovy must be in (0, 180) deg, got {fovy!r}")
         cam = Camera(name, p, t, float(fovy))
         self._cameras[name] = cam

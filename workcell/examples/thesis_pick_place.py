@@ -19,8 +19,8 @@ from workcell.sim.simulator import Simulator
 from workcell.spatial import translation
 
 __all__ = [
-    "CUBE",
     "CONFIG",
+    "CUBE",
     "CUBE_SIZE",
     "ROBOT",
     "SPEED",
@@ -42,7 +42,7 @@ CUBE_CORNER = (0.28, -0.18, TABLE_TOP)  # m: the cube's part frame (a corner) on
 STAGE_1_CENTRE = (0.24, 0.22)  # m (x, y)
 STAGE_1_SIZE = (0.12, 0.12, 0.10)  # m
 STAGE_1_TOP = TABLE_TOP + STAGE_1_SIZE[2]
-APPROACH = 0.08  # m: vertical approach and retreat
+APPROACH = 0.1  # m: vertical approach and retreat
 CONFIG = "ru"  # right arm, elbow up: the Puma's usual working posture
 
 

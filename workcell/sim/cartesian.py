@@ -10,7 +10,8 @@ limits, configuration not available: the available ones are listed).
 (thesis §4.5 ``move_straight_line``): positions evenly spaced at most ``step`` apart,
 orientation interpolated by slerp (held when start and target orientations agree), each
 sample solved by IK warm-started at the previous sample's joints (the Puma closed form's
-nearest in-limit solution, or numerical IK from the previous q). A sample with no
+nearest in-limit solution of the start's arm and elbow configuration, or numerical IK
+from the previous q). A sample with no
 solution, or a joint that would jump more than ``max_jump`` between samples (a
 singularity on the way), makes the line impossible: :class:`UnreachableError` says at
 which fraction of the line, where, which joint and why. :func:`line_deviation` then
@@ -25,10 +26,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell.cell.workcell import RobotPlacement
-from workcell.errors import GeometryError, KinematicsError, UnreachableError
+from workcell.checks import is_finite_number
+from workcell.errors import GeometryError, KinematicsError, ProgramError, UnreachableError
+from workcell.robots.ik_closed import puma_config, puma_ik_report
+from workcell.sim.profiles import step_times
 from workcell.spatial import angle_between, as_transform, invert
 
-__all__ = ["line_deviation", "line_waypoints", "solve_pose", "world_target"]
+__all__ = [
+    "CartesianCommands",
+    "line_deviation",
+    "line_waypoints",
+    "solve_pose",
+    "world_target",
+]
 
 Array = NDArray[np.float64]
 _ANGLE_STEP = math.radians(2.0)  # rad: at most this much rotation between line samples
@@ -43,16 +53,16 @@ def world_target(T: ArrayLike, command: str, robot: str) -> Array:
 
 
 def _closed_form(placement: RobotPlacement, Tb: Array, q: Array, config: str | None) -> Array:
-    from workcell.robots.ik_closed import puma_ik_report
-
     sols, reason = puma_ik_report(placement.robot, Tb, q)
     ok = [s for s in sols if s.within_limits]
     if config is not None:
         have = sorted({s.config for s in ok if s.config})
         ok = [s for s in ok if s.config and all(c in s.config for c in config)]
         if not ok and have:
+            outside = [s for s in sols if s.config and all(c in s.config for c in config)]
+            why = f" ({outside[0].reason})" if outside and outside[0].reason else ""
             raise UnreachableError(
-                f"configuration '{config}' cannot reach the pose within the limits; "
+                f"configuration '{config}' cannot reach the pose within the limits{why}; "
                 f"available: {', '.join(have)}"
             )
     if not ok:
@@ -130,10 +140,13 @@ def line_waypoints(
     poses[:, :3, 3] = p0 + np.outer(s, p1 - p0)
     Q = np.empty((n, len(q0)))
     prev = q0
+    robot = placement.robot
+    # the Puma keeps its arm and elbow configuration along a line (a switch is a jump)
+    keep = puma_config(robot, q0)[:2] if robot.family == "puma" else None
     for k in range(n):
         where = f"at {s[k]:.0%} of the line, tool at ({', '.join(f'{v:.4g}' for v in poses[k, :3, 3])}) m"
         try:
-            q = solve_pose(placement, poses[k], prev)
+            q = solve_pose(placement, poses[k], prev, keep)
         except UnreachableError as exc:
             raise UnreachableError(f"{where}: {exc}") from exc
         jump = np.abs(q - prev)
@@ -159,3 +172,78 @@ def line_deviation(placement: RobotPlacement, Q: Array, p0: Array, p1: Array) ->
     dev = np.linalg.norm(P - (p0 + np.outer(s, d)), axis=1)
     i = int(np.argmax(dev))
     return float(dev[i]), i
+
+
+class CartesianCommands:
+    """``move_end_effector`` and ``move_straight_line`` (a mixin of Simulator)."""
+
+    def move_end_effector(self, robot: str, T: ArrayLike, config: str | None = None) -> None:
+        """Move the tool to the world pose ``T`` (4x4, m): IK, then linear in joints.
+
+        ``config``: Puma configuration letters to require (e.g. "ru"); default: the
+        in-limit solution nearest the current joints. Raises UnreachableError saying why.
+        """
+        name = self._robot(robot)
+        target = world_target(T, "move_end_effector", name)
+        try:
+            q = solve_pose(self.cell.robots[name], target, self.joints(name), config)
+        except UnreachableError as exc:
+            raise UnreachableError(f"move_end_effector '{name}': {exc}") from exc
+        self._move(name, q, "move_end_effector")
+
+    def move_straight_line(
+        self, robot: str, T: ArrayLike, step: float = 0.005, *, max_jump: float = math.radians(10)
+    ) -> None:
+        """Move the tool along the straight line to the world pose ``T`` (4x4, m).
+
+        Samples at most ``step`` (m) apart (orientation slerped, held when unchanged),
+        IK at each warm-started at the previous, linear in joints between samples; a
+        sample out of reach, a joint jump above ``max_jump`` (rad) or frames straying
+        more than ``line_tolerance`` from the line raise UnreachableError saying where.
+        """
+        name = self._robot(robot)
+        target = world_target(T, "move_straight_line", name)
+        for what, v in (("step", step), ("max_jump", max_jump)):
+            if not (is_finite_number(v) and v > 0):
+                raise ProgramError(f"move_straight_line '{name}': {what} must be > 0, got {v!r}")
+        placement = self.cell.robots[name]
+        start = self.tool_pose(name)
+        q0 = self.joints(name)
+        try:
+            Qw, _ = line_waypoints(
+                placement, q0, start, target, step=float(step), max_jump=float(max_jump)
+            )
+        except UnreachableError as exc:
+            raise UnreachableError(f"move_straight_line '{name}': {exc}") from exc
+        times, Qr = self._plan_waypoints(name, q0, Qw)
+        dev, i = line_deviation(placement, Qr, start[:3, 3], target[:3, 3])
+        if dev > self.line_tolerance:
+            raise UnreachableError(
+                f"move_straight_line '{name}': the tool strays {dev * 1e3:.3g} mm from the "
+                f"line at t = {times[i]:.4g} s (line_tolerance {self.line_tolerance * 1e3:.3g} "
+                f"mm); use a smaller step"
+            )
+        length = float(np.linalg.norm(target[:3, 3] - start[:3, 3]))
+        self._run(
+            name, times, Qr, "move_straight_line", f"{length * 1e3:.4g} mm line, {len(Qw)} samples"
+        )
+
+    def _plan_waypoints(self, name: str, q0: Array, Qw: Array) -> tuple[Array, Array]:
+        """Path-mode frames through joint waypoints Qw (k, dof), linear between them."""
+        speed, dt = self._speed[name], self.dt
+        times, rows = [np.empty(0)], [np.empty((0, len(q0)))]
+        clock, prev = self.sim_time, q0
+        for q in Qw:
+            d = q - prev
+            big = float(np.max(np.abs(d)))
+            if big == 0.0:
+                continue
+            T = big / speed
+            t = step_times(T, dt)
+            R = prev + np.outer(t / T, d)
+            R[-1] = q
+            times.append(clock + t)
+            rows.append(R)
+            clock += T
+            prev = q
+        return np.concatenate(times), np.concatenate(rows)

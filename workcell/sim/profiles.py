@@ -20,7 +20,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["PROFILES", "duration", "progress"]
+__all__ = ["PROFILES", "duration", "progress", "step_times"]
+
+_REMAINDER_TOL = 1e-9  # a remainder below this fraction of dT is no step
 
 PROFILES = ("linear", "trapezoid", "quintic")
 Array = NDArray[np.float64]
@@ -58,3 +60,23 @@ def progress(
         np.where(t <= T - ta, 0.5 * a * ta * ta + v * (t - ta), distance - 0.5 * a * (T - t) ** 2),
     )
     return np.clip(x / distance, 0.0, 1.0)
+
+
+def step_times(T: float, dt: float) -> Array:
+    """Sample times in (0, T] of a motion of duration T sampled every dt (thesis eq. 4.27).
+
+    ``T = m dt + Delta T``: the m full steps ``dt, 2 dt, ..., m dt`` then the remainder
+    step ending at T exactly; when ``Delta T`` is zero (below 1e-9 dt) the last full step
+    is the end and its time is set to T exactly. T = 0 gives no samples.
+    """
+    if not T > 0:
+        return np.empty(0)
+    m = math.floor(T / dt)
+    rem = T - m * dt
+    t = dt * np.arange(1, m + 1, dtype=np.float64)
+    if rem > _REMAINDER_TOL * dt:
+        return np.append(t, T)
+    if len(t) == 0:  # T is below the tolerance itself: one step
+        return np.array([T])
+    t[-1] = T
+    return t

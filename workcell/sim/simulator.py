@@ -72,11 +72,10 @@ applied restores joints, clocks, speeds and timeline as they were before the com
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any, NamedTuple
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -84,67 +83,28 @@ from numpy.typing import ArrayLike, NDArray
 
 from workcell.cell.compile import CompiledCell, compile_cell
 from workcell.cell.workcell import Workcell
+from workcell.checks import is_finite_number
 from workcell.errors import (
     CollisionError,
-    GraspError,
     JointLimitError,
     ProgramError,
-    UnreachableError,
 )
-from workcell.sim import cartesian, profiles
+from workcell.sim import profiles
+from workcell.sim.cartesian import CartesianCommands
 from workcell.sim.contacts import DEFAULT_TOLERANCE, ContactMonitor, Penetration
-from workcell.sim.grasp import PartBox, describe_failure, grasp_candidates
+from workcell.sim.gripping import Carried, GraspRecord, GripperCommands, Hold
+from workcell.sim.profiles import step_times
 from workcell.sim.timeline import DEFAULT_MEMORY_LIMIT, Event, Timeline
-from workcell.spatial import invert, pos_quat_from_pose
 
 __all__ = ["JOINT_BY_JOINT_CLOCKS", "MODES", "Hold", "Simulator", "step_times"]
 
 MODES = ("path", "joint-by-joint", "playback")
 JOINT_BY_JOINT_CLOCKS = ("thesis", "sequential")
-_REMAINDER_TOL = 1e-9  # a remainder below this fraction of dT is no step
 
 Array = NDArray[np.float64]
 
 
-class Hold(NamedTuple):
-    """A grasp: ``part`` held by a robot's gripper at relative pose ``relative`` (4x4, the
-    part's body frame in the gripper body's frame), as position (3,) and wxyz quaternion."""
-
-    part: str
-    relative: Array
-    pos: Array
-    quat: Array
-
-
-def step_times(T: float, dt: float) -> Array:
-    """Sample times in (0, T] of a motion of duration T sampled every dt (thesis eq. 4.27).
-
-    ``T = m dt + Delta T``: the m full steps ``dt, 2 dt, ..., m dt`` then the remainder
-    step ending at T exactly; when ``Delta T`` is zero (below 1e-9 dt) the last full step
-    is the end and its time is set to T exactly. T = 0 gives no samples.
-    """
-    if not T > 0:
-        return np.empty(0)
-    m = math.floor(T / dt)
-    rem = T - m * dt
-    t = dt * np.arange(1, m + 1, dtype=np.float64)
-    if rem > _REMAINDER_TOL * dt:
-        return np.append(t, T)
-    if len(t) == 0:  # T is below the tolerance itself: one step
-        return np.array([T])
-    t[-1] = T
-    return t
-
-
-def _finite_number(x: object) -> bool:
-    return (
-        isinstance(x, (int, float, np.integer, np.floating))
-        and not isinstance(x, bool)
-        and math.isfinite(float(x))
-    )
-
-
-class Simulator:
+class Simulator(CartesianCommands, GripperCommands):
     """Kinematic simulator of a workcell (see the module doc).
 
     ``mode``: "path", "joint-by-joint" or "playback"; ``dt`` the sampling interval dT
@@ -179,7 +139,7 @@ class Simulator:
     ) -> None:
         if mode not in MODES:
             raise ProgramError(f"unknown simulation mode {mode!r}; valid: {', '.join(MODES)}")
-        if not (_finite_number(dt) and dt > 0):
+        if not (is_finite_number(dt) and dt > 0):
             raise ProgramError(f"dt must be a finite number of seconds > 0, got {dt!r}")
         if joint_by_joint_clock not in JOINT_BY_JOINT_CLOCKS:
             raise ProgramError(
@@ -195,7 +155,7 @@ class Simulator:
             ("contact_tolerance", contact_tolerance),
             ("line_tolerance", line_tolerance),
         ):
-            if not (_finite_number(v) and v > 0):
+            if not (is_finite_number(v) and v > 0):
                 raise ProgramError(f"{what} must be a finite number > 0, got {v!r}")
         self.cell = cell
         self.mode = mode
@@ -237,6 +197,7 @@ class Simulator:
         self._boxes = {p: cell.bounding_box(p) for p in cell.movable_parts}
         self._centroids = {p: cell.centroid_frame(p)[:3, 3] for p in cell.movable_parts}
         self._holds: dict[str, Hold] = {}
+        self.grasps: list[GraspRecord] = []  # every grasp and release, in order
         self._holders: dict[str, list[str]] = {p: [] for p in cell.movable_parts}
         self.contacts = ContactMonitor(cc, contact_tolerance)
         self._touching: set[tuple[str, str]] = set()
@@ -301,30 +262,6 @@ class Simulator:
         """World position (m) of each movable part's body frame, by name."""
         return {p: self.data.xpos[b].tolist() for p, b in self._part_body.items()}
 
-    def held(self, robot: str) -> str | None:
-        """The part the robot's gripper holds, or None."""
-        h = self._holds.get(self._robot(robot))
-        return None if h is None else h.part
-
-    def part_pose(self, part: str) -> Array:
-        """World pose (4x4) of a movable part's body frame."""
-        if part not in self._part_body:
-            known = ", ".join(self._part_body) or "none"
-            raise ProgramError(f"no movable part {part!r}; movable parts: {known}")
-        b = self._part_body[part]
-        T = np.eye(4)
-        T[:3, :3] = self.data.xmat[b].reshape(3, 3)
-        T[:3, 3] = self.data.xpos[b]
-        return T
-
-    def gripper_pose(self, robot: str) -> Array:
-        """World pose (4x4) of the robot's gripper body (the weld's body1)."""
-        b = self._gripper_id(self._robot(robot), "gripper_pose")
-        T = np.eye(4)
-        T[:3, :3] = self.data.xmat[b].reshape(3, 3)
-        T[:3, 3] = self.data.xpos[b]
-        return T
-
     def clearance(self, a: str, b: str) -> float:
         """Minimum distance (m) between two things now; negative: penetration depth.
 
@@ -352,7 +289,7 @@ class Simulator:
         ``robot_speed``). Must be finite, > 0 and at most the fastest joint's limit."""
         name = self._robot(robot)
         top = float(np.max(self.cell.robots[name].robot.max_speeds))
-        if not (_finite_number(speed) and 0 < float(speed) <= top):
+        if not (is_finite_number(speed) and 0 < float(speed) <= top):
             raise ProgramError(
                 f"set_speed '{name}': speed must be a number in (0, {top:.4g}] rad/s "
                 f"(the fastest joint's limit), got {speed!r}"
@@ -380,143 +317,9 @@ class Simulator:
         self.mode = mode
         self.timeline.add_event(self.sim_time, None, "mode", f"mode {mode}")
 
-    def move_end_effector(self, robot: str, T: ArrayLike, config: str | None = None) -> None:
-        """Move the tool to the world pose ``T`` (4x4, m): IK, then linear in joints.
-
-        ``config``: Puma configuration letters to require (e.g. "ru"); default: the
-        in-limit solution nearest the current joints. Raises UnreachableError saying why.
-        """
-        name = self._robot(robot)
-        target = cartesian.world_target(T, "move_end_effector", name)
-        try:
-            q = cartesian.solve_pose(self.cell.robots[name], target, self.joints(name), config)
-        except UnreachableError as exc:
-            raise UnreachableError(f"move_end_effector '{name}': {exc}") from exc
-        self._move(name, q, "move_end_effector")
-
-    def move_straight_line(
-        self, robot: str, T: ArrayLike, step: float = 0.005, *, max_jump: float = math.radians(10)
-    ) -> None:
-        """Move the tool along the straight line to the world pose ``T`` (4x4, m).
-
-        Samples at most ``step`` (m) apart (orientation slerped, held when unchanged),
-        IK at each warm-started at the previous, linear in joints between samples; a
-        sample out of reach, a joint jump above ``max_jump`` (rad) or frames straying
-        more than ``line_tolerance`` from the line raise UnreachableError saying where.
-        """
-        name = self._robot(robot)
-        target = cartesian.world_target(T, "move_straight_line", name)
-        for what, v in (("step", step), ("max_jump", max_jump)):
-            if not (_finite_number(v) and v > 0):
-                raise ProgramError(f"move_straight_line '{name}': {what} must be > 0, got {v!r}")
-        placement = self.cell.robots[name]
-        start = self.tool_pose(name)
-        q0 = self.joints(name)
-        try:
-            Qw, _ = cartesian.line_waypoints(
-                placement, q0, start, target, step=float(step), max_jump=float(max_jump)
-            )
-        except UnreachableError as exc:
-            raise UnreachableError(f"move_straight_line '{name}': {exc}") from exc
-        times, Qr = self._plan_waypoints(name, q0, Qw)
-        dev, i = cartesian.line_deviation(placement, Qr, start[:3, 3], target[:3, 3])
-        if dev > self.line_tolerance:
-            raise UnreachableError(
-                f"move_straight_line '{name}': the tool strays {dev * 1e3:.3g} mm from the "
-                f"line at t = {times[i]:.4g} s (line_tolerance {self.line_tolerance * 1e3:.3g} "
-                f"mm); use a smaller step"
-            )
-        length = float(np.linalg.norm(target[:3, 3] - start[:3, 3]))
-        self._run(
-            name, times, Qr, "move_straight_line", f"{length * 1e3:.4g} mm line, {len(Qw)} samples"
-        )
-
-    def close_gripper(
-        self, robot: str, max_distance: float = 0.02, max_angle: float = math.radians(10)
-    ) -> str:
-        """Close the robot's gripper; grasp the first part passing the thesis's tests.
-
-        ``max_distance`` (m) from the tool-centre point to the part's centroid,
-        ``max_angle`` (rad) between the tool's z axis and a box axis; the part's width
-        across the grasp must fit the opening. Returns the part's name; raises
-        GraspError naming the nearest candidate and the test it failed.
-        """
-        name = self._robot(robot)
-        self._gripper_id(name, "close_gripper")
-        for what, v in (("max_distance", max_distance), ("max_angle", max_angle)):
-            if not (_finite_number(v) and v >= 0):
-                raise ProgramError(f"close_gripper '{name}': {what} must be >= 0, got {v!r}")
-        if name in self._holds:
-            raise GraspError(f"close_gripper '{name}': already holds '{self._holds[name].part}'")
-        gripper = self.cell.robots[name].robot.gripper
-        opening = float(gripper.max_opening)
-        boxes = []
-        for p in self._part_body:
-            if name in self._holders[p]:
-                continue
-            P = self.part_pose(p)
-            lo, hi = self._boxes[p]
-            boxes.append(
-                PartBox(p, P[:3, :3], (hi - lo) / 2.0, P[:3, :3] @ self._centroids[p] + P[:3, 3])
-            )
-        tests = dict(opening=opening, max_distance=float(max_distance), max_angle=float(max_angle))
-        cands = grasp_candidates(self.tool_pose(name), boxes, **tests)
-        chosen = next((c for c in cands if c.failed is None), None)
-        if chosen is None:
-            raise GraspError(describe_failure(name, cands, **tests))
-        part = chosen.part
-        G = self.gripper_pose(name)
-        rel = invert(G) @ self.part_pose(part)
-        pos, quat = pos_quat_from_pose(rel)
-        with self._transaction():
-            e = self._weld[(name, part)]
-            self.model.eq_data[e, 3:6] = pos
-            self.model.eq_data[e, 6:10] = quat
-            self.data.eq_active[e] = 1
-            self._holds[name] = Hold(part, rel, pos, quat)
-            self._holders[part].append(name)
-            self._update_exclusions()
-            self._set_fingers(name, min(chosen.width, opening) / 2.0)
-            self.timeline.add_event(
-                self.sim_time,
-                name,
-                "grasp",
-                f"grasp '{part}': axis {math.degrees(chosen.angle):.3g} deg, width "
-                f"{chosen.width * 1e3:.4g} mm, distance {chosen.distance * 1e3:.3g} mm",
-            )
-        return part
-
-    def open_gripper(self, robot: str) -> str | None:
-        """Open the robot's gripper; release the part it holds (returned; None if empty).
-
-        A released part stays where it is, unless another robot holds it too (a handoff):
-        that robot carries it from now on.
-        """
-        name = self._robot(robot)
-        self._gripper_id(name, "open_gripper")
-        hold = self._holds.get(name)
-        with self._transaction():
-            if hold is not None:
-                del self._holds[name]
-                self._holders[hold.part].remove(name)
-                self.data.eq_active[self._weld[(name, hold.part)]] = 0
-                self._update_exclusions()
-            travel = float(self.cell.robots[name].robot.gripper.finger_travel)
-            self._set_fingers(name, travel)
-            if hold is None:
-                self.timeline.add_event(self.sim_time, name, "open", "open_gripper: nothing held")
-            else:
-                others = self._holders[hold.part]
-                to = f", now carried by '{others[0]}'" if others else ""
-                where = ", ".join(f"{v:.4g}" for v in self.part_pose(hold.part)[:3, 3])
-                self.timeline.add_event(
-                    self.sim_time, name, "release", f"release '{hold.part}' at ({where}) m{to}"
-                )
-        return None if hold is None else hold.part
-
     def wait(self, seconds: float) -> None:
         """Let ``seconds`` of simulated time pass with nothing moving (one frame at the end)."""
-        if not (_finite_number(seconds) and seconds >= 0):
+        if not (is_finite_number(seconds) and seconds >= 0):
             raise ProgramError(f"wait: seconds must be a finite number >= 0, got {seconds!r}")
         s = float(seconds)
         with self._transaction():
@@ -584,40 +387,6 @@ class Simulator:
             )
         return a
 
-    def _gripper_id(self, name: str, command: str) -> int:
-        if name not in self._gripper:
-            raise ProgramError(
-                f"{command} '{name}': the robot has no gripper; robots with one: "
-                f"{', '.join(self._gripper) or 'none'}"
-            )
-        return self._gripper[name]
-
-    def _update_exclusions(self) -> None:
-        """A held part never collides with the gripper(s) holding it."""
-        ex: set[tuple[int, int]] = set()
-        for robot, hold in self._holds.items():
-            ex |= self.contacts.exclude(self._gripper_tree[robot], {self._part_body[hold.part]})
-        self.contacts.excluded = ex
-
-    def _set_fingers(self, name: str, q_each: float) -> None:
-        """Put both fingers at ``q_each`` (m from closed): one frame, no simulated time."""
-        row = self.data.qpos.copy()
-        row[self._fingers[name]] = q_each
-        self._emit(np.array([self.sim_time]), row[None, :], [], name)
-
-    def _carried(self, name: str) -> list[tuple[int, int, Array, Array]]:
-        """(gripper body, free-joint qpos address, relative pos, quat) of what ``name`` carries."""
-        hold = self._holds.get(name)
-        if hold is None:
-            return []
-        others = [r for r in self._holders[hold.part] if r != name]
-        if others:
-            raise ProgramError(
-                f"'{name}' cannot move: '{hold.part}' is also held by '{others[0]}'; "
-                f"open one of the two grippers first"
-            )
-        return [(self._gripper[name], self._free_adr[hold.part], hold.pos, hold.quat)]
-
     def _plan(self, name: str, q0: Array, target: Array) -> tuple[Array, Array]:
         """Simulated times (k,) and joint values (k, dof) of a move, last row = target."""
         speed, dt, prof, acc = self._speed[name], self.dt, self.profile, self.acceleration
@@ -651,26 +420,6 @@ class Simulator:
             rows.append(Q)
         return np.concatenate(times), np.concatenate(rows)
 
-    def _plan_waypoints(self, name: str, q0: Array, Qw: Array) -> tuple[Array, Array]:
-        """Path-mode frames through joint waypoints Qw (k, dof), linear between them."""
-        speed, dt = self._speed[name], self.dt
-        times, rows = [np.empty(0)], [np.empty((0, len(q0)))]
-        clock, prev = self.sim_time, q0
-        for q in Qw:
-            d = q - prev
-            big = float(np.max(np.abs(d)))
-            if big == 0.0:
-                continue
-            T = big / speed
-            t = step_times(T, dt)
-            R = prev + np.outer(t / T, d)
-            R[-1] = q
-            times.append(clock + t)
-            rows.append(R)
-            clock += T
-            prev = q
-        return np.concatenate(times), np.concatenate(rows)
-
     def _move(self, name: str, target: Array, command: str) -> None:
         placement = self.cell.robots[name]
         try:
@@ -700,7 +449,7 @@ class Simulator:
         self,
         times: Array,
         Q: Array,
-        carried: list[tuple[int, int, Array, Array]],
+        carried: list[Carried],
         mover: str | None = None,
     ) -> None:
         """Apply (path, joint-by-joint) or store (playback) frames; advance both clocks.
@@ -761,7 +510,8 @@ class Simulator:
         onset = [p for p in pens if (p[0], p[1]) not in self._touching]
         self._touching = now
         for a, b, depth in onset:
-            involved = [self.contacts.robot_of(a), self.contacts.robot_of(b)]
+            holder = {h.part: r for r, h in self._holds.items()}
+            involved = [self.contacts.robot_of(x) or holder.get(x) for x in (a, b)]
             robot = mover if mover in involved else (involved[0] or involved[1])
             detail = f"{a} with {b}: depth {depth * 1e3:.3g} mm"
             self.timeline.add_event(t, robot, "collision", detail)
@@ -777,6 +527,7 @@ class Simulator:
             self._wall,
             dict(self._speed),
             self.timeline.mark(),
+            len(self.grasps),
             dict(self._holds),
             {p: list(r) for p, r in self._holders.items()},
             set(self._touching),
@@ -792,6 +543,7 @@ class Simulator:
                 self._wall,
                 self._speed,
                 mark,
+                n_grasps,
                 self._holds,
                 self._holders,
                 self._touching,
@@ -800,6 +552,7 @@ class Simulator:
                 self.model.eq_data[:],
             ) = saved
             self.timeline.truncate(mark)
+            del self.grasps[n_grasps:]
             self.data.qpos[:] = qpos
             mujoco.mj_kinematics(self.model, self.data)
             raise

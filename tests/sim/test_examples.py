@@ -1,0 +1,96 @@
+"""The thesis's example workcells 2 (pick and place) and 3 (handoff), in every mode."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+
+from workcell.examples import thesis_handoff as ho
+from workcell.examples import thesis_pick_place as pp
+
+MODES = ["path", "joint-by-joint", "playback"]
+
+
+@functools.cache
+def run(example: str, mode: str):
+    return {"pp": pp, "ho": ho}[example].run(mode, 0.005)
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_pick_place_ends_with_the_cube_resting_on_stage_1(mode):
+    sim = run("pp", mode)
+    pose = sim.part_pose(pp.CUBE)
+    # the cube's bottom face lies on the stage's top face, inside its footprint
+    corners = pose[:3, :3] @ (np.array([[0, 0, 0], [1, 1, 1]]) * pp.CUBE_SIZE).T
+    bottom = pose[2, 3] + corners[2].min()
+    assert bottom == pytest.approx(pp.STAGE_1_TOP, abs=1e-9)
+    centre = pose[:3, :3] @ np.full(3, pp.CUBE_SIZE / 2) + pose[:3, 3]
+    assert np.abs(centre - pp.place_position()).max() < 1e-9
+    assert abs(sim.clearance(pp.CUBE, pp.STAGE_1)) < 1e-6  # touching
+    hits = [e for e in sim.events if e.kind == "collision"]
+    if mode == "joint-by-joint":
+        # joint by joint, the return home (joint 2 before joint 3) dips a finger into the
+        # table: the mode shows what a robot moving one joint at a time would hit
+        assert [(e.robot, e.detail.split(":")[0]) for e in hits] == [
+            (pp.ROBOT, f"{pp.ROBOT}.gripper.right with table")
+        ]
+        moves = [e.t for e in sim.events if e.kind == "move"]
+        assert moves[-2] <= hits[0].t <= moves[-1]  # during the last move
+    else:
+        assert hits == []
+    assert [e.kind for e in sim.events if e.kind in ("grasp", "release")] == ["grasp", "release"]
+    assert np.allclose(sim.joints(pp.ROBOT), sim.cell.robots[pp.ROBOT].robot.poses["home"])
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_handoff_moves_the_sphere_to_table_2(mode):
+    sim = run("ho", mode)
+    assert np.abs(sim.part_pose(ho.SPHERE)[:3, 3] - ho.PLACE).max() < 1e-9
+    assert sim.part_pose(ho.SPHERE)[2, 3] - ho.RADIUS == pytest.approx(ho.TABLE_TOP, abs=1e-12)
+    hits = [e for e in sim.events if e.kind == "collision"]
+    if mode == "joint-by-joint":
+        # one joint at a time, puma_1's first joint swings the sphere into puma_2's waiting
+        # gripper, and puma_2's return home drags its fingers through the table
+        assert hits
+        assert all(e.robot in (ho.GIVER, ho.RECEIVER) for e in hits)
+        assert any("sphere" in e.detail and e.robot == ho.GIVER for e in hits)
+    else:
+        assert hits == []
+    events = [(e.robot, e.kind) for e in sim.events if e.kind in ("grasp", "release")]
+    assert events == [
+        (ho.GIVER, "grasp"),
+        (ho.RECEIVER, "grasp"),
+        (ho.GIVER, "release"),
+        (ho.RECEIVER, "release"),
+    ]
+    for robot in (ho.GIVER, ho.RECEIVER):
+        assert np.allclose(sim.joints(robot), sim.cell.robots[robot].robot.poses["home"])
+    summary = sim.summary()
+    assert set(summary) >= {
+        "sim_time_s",
+        "wall_time_s",
+        "frames",
+        "events",
+        "collisions",
+        "objects",
+    }
+    assert summary["objects"][ho.SPHERE] == pytest.approx(ho.PLACE.tolist(), abs=1e-9)
+
+
+def test_path_and_playback_give_the_same_frames_and_clock():
+    for ex in ("pp", "ho"):
+        a, b = run(ex, "path"), run(ex, "playback")
+        assert a.frames == b.frames
+        assert a.sim_time == b.sim_time
+        assert np.array_equal(a.timeline.qpos(), b.timeline.qpos())
+
+
+def test_the_clock_is_the_sum_of_the_moves_durations():
+    # every move event reports its duration; they add up to the simulated time
+    sim = run("ho", "path")
+    total = sum(
+        float(e.detail.rsplit(", ", 1)[1].split(" s")[0]) for e in sim.events if e.kind == "move"
+    )
+    assert total == pytest.approx(sim.sim_time, rel=1e-5)
