@@ -53,33 +53,71 @@ def _demo_solids(args: argparse.Namespace) -> int:
     return 0 if same and all(r.valid for r in rows) else 1
 
 
-def _demo_joints(args: argparse.Namespace) -> int:
-    from workcell.cell import export_cell
-    from workcell.examples.thesis_joints import build, run
+EXAMPLES = {
+    "joints": "workcell.examples.thesis_joints",
+    "pick-place": "workcell.examples.thesis_pick_place",
+    "handoff": "workcell.examples.thesis_handoff",
+}
+TITLES = {
+    "joints": "the thesis's example 1 (ch. 5): one Puma 260 moved in joint space",
+    "pick-place": "the thesis's example 2 (ch. 5): pick and place with one Puma 260",
+    "handoff": "the thesis's example 3 (ch. 5): two Puma 260s hand a sphere over",
+}
 
+
+def _demo_cell(args: argparse.Namespace) -> int:
+    import importlib
+
+    from workcell.cell import export_cell
+
+    example = importlib.import_module(EXAMPLES[args.example])
     t0 = time.perf_counter()
-    sim = run(args.mode, args.dt)
-    elapsed = time.perf_counter() - t0
-    out = sim.summary()
+    sim = example.run(args.mode, args.dt)
+    result = sim
+    if args.physics:
+        from workcell.sim.physics import run_physics
+
+        result = run_physics(sim, progress=not args.json)
+    out = result.summary()
     if args.mjcf:
-        out["mjcf"] = str(export_cell(build(), args.mjcf))
+        out["mjcf"] = str(export_cell(example.build(), args.mjcf))
+    if args.save:
+        from workcell.record import record
+
+        out["rrd"] = str(record(result, args.save, progress=not args.json))
+    if args.render:
+        from workcell.record import render_frame, save_png
+
+        out["png"] = str(save_png(render_frame(result, -1), args.render))
+    elapsed = time.perf_counter() - t0
     if args.json:
         print(json.dumps(out))
         return 0
-    print(f"The thesis's example 1 (ch. 5): one Puma 260 in joint space, {args.mode} mode\n")
+    kind = "physics (mj_step)" if args.physics else f"kinematic, {args.mode} mode"
+    print(f"{TITLES[args.example]}; {kind}\n")
     for e in out["events"]:
-        print(f"  t = {e['t']:8.4f} s  {e['robot'] or '-':8s} {e['kind']:6s} {e['detail']}")
+        print(f"  t = {e['t']:8.3f} s  {e['robot'] or '-':8s} {e['kind']:9s} {e['detail']}")
     print(
-        f"\nsimulated time {out['sim_time_s']:.2f} s (eq. 4.27: 170 deg / 0.3 rad/s = 9.89 s); "
-        f"{out['frames']} frames at dt = {sim.dt:g} s"
+        f"\nsimulated time {out['sim_time_s']:.2f} s; {out['frames']} frames at dt = {args.dt:g} s; "
+        f"{out['collisions']} collision(s)"
     )
+    if args.example == "joints":
+        print("(eq. 4.27: 170 deg / 0.3 rad/s = 9.89 s)")
+    for name, pos in out["objects"].items():
+        print(f"{name} ends at ({', '.join(f'{v:.4f}' for v in pos)}) m")
+    wall = max(out["wall_time_s"], 1e-12)
     print(
-        f"simulator wall clock {out['wall_time_s']:.3f} s "
-        f"({out['sim_time_s'] / max(out['wall_time_s'], 1e-12):.0f}x real time); "
-        f"total with compile {elapsed:.2f} s"
+        f"simulator wall clock {out['wall_time_s']:.3f} s ({out['sim_time_s'] / wall:.0f}x real "
+        f"time); total {elapsed:.2f} s"
     )
-    if out["mjcf"]:
-        print(f"cell written to {out['mjcf']}")
+    if out.get("mjcf"):
+        print(
+            f"cell written to {out['mjcf']} (open it with: python -m mujoco.viewer --mjcf {out['mjcf']})"
+        )
+    if out.get("rrd"):
+        print(f"recording written to {out['rrd']} (open it with: rerun {out['rrd']})")
+    if out.get("png"):
+        print(f"picture written to {out['png']}")
     return 0
 
 
@@ -92,7 +130,7 @@ def _demo(args: argparse.Namespace) -> int:
         from workcell.errors import ProgramError
 
         raise ProgramError(f"--dt must be > 0 s, got {args.dt}")
-    return _demo_joints(args)
+    return _demo_cell(args)
 
 
 def _export(args: argparse.Namespace) -> int:
@@ -114,9 +152,9 @@ def main(argv: list[str] | None = None) -> int:
     demo = sub.add_parser("demo", help="run a built-in example")
     demo.add_argument(
         "example",
-        choices=["solids", "joints"],
-        help="solids: the thesis's example solids (ch. 2-3); "
-        "joints: its example 1, one Puma 260 moved in joint space (ch. 5)",
+        choices=["solids", *EXAMPLES],
+        help="solids: the thesis's example solids (ch. 2-3); joints, pick-place, handoff: "
+        "its three example workcells (ch. 5)",
     )
     demo.add_argument(
         "--mode",
@@ -126,7 +164,15 @@ def main(argv: list[str] | None = None) -> int:
     )
     demo.add_argument("--dt", type=float, metavar="SECONDS", help="sampling interval (0.01)")
     demo.add_argument("--mjcf", metavar="DIR", help="also export the cell as MJCF to DIR")
-    demo.add_argument("--save", metavar="FILE.json", help="where to save the example model")
+    demo.add_argument(
+        "--physics", action="store_true", help="also run the program dynamically (mj_step)"
+    )
+    demo.add_argument(
+        "--save",
+        metavar="FILE",
+        help="solids: save the model (JSON) to FILE; cells: record the run to FILE.rrd",
+    )
+    demo.add_argument("--render", metavar="FILE.png", help="render the last frame to a PNG")
     demo.add_argument(
         "--json", action="store_true", help="print one JSON object instead of a table"
     )

@@ -8,7 +8,10 @@ are grouped under *things* for queries: a robot's name stands for all of its bod
 After ``mj_kinematics`` + ``mj_collision`` (MuJoCo's own narrow phase on the convex
 collision pieces), :meth:`ContactMonitor.penetrations` lists the pairs of labels whose
 geoms overlap by more than ``tolerance`` (m), skipping pairs the simulator excludes
-(a held part against the gripper holding it). Parent/child bodies and links up to two
+(a held part against the gripper holding it). :func:`contact_model` gives the
+simulator's copy of the model whose geom margins are ``-tolerance / 2`` (two geoms' margins
+add up), so MuJoCo lists a contact only for an overlap deeper than the tolerance and the
+common frame, with parts merely resting on their supports, has no contact to look at. Parent/child bodies and links up to two
 apart never collide (MuJoCo's parent filter and the robot's ``<exclude>`` pairs); parts
 resting on a support touch at depth ~0, under the tolerance.
 
@@ -18,6 +21,7 @@ resting on a support touch at depth ~0, under the tolerance.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterable
 
 import mujoco
@@ -27,7 +31,7 @@ from numpy.typing import NDArray
 from workcell.cell.compile import GROUND, CompiledCell
 from workcell.errors import ProgramError
 
-__all__ = ["DEFAULT_TOLERANCE", "ContactMonitor", "Penetration"]
+__all__ = ["DEFAULT_TOLERANCE", "ContactMonitor", "Penetration", "contact_model"]
 
 DEFAULT_TOLERANCE = 1e-4  # m: deeper overlaps are collisions; shallower ones are touching
 _CLEARANCE_CAP = 100.0  # m: mj_geomDistance's distmax
@@ -36,11 +40,24 @@ _CLEARANCE_CAP = 100.0  # m: mj_geomDistance's distmax
 Penetration = tuple[str, str, float]  # (label, label) sorted, depth (m, > 0)
 
 
+def contact_model(model: mujoco.MjModel, tolerance: float) -> mujoco.MjModel:
+    """A copy of ``model`` that reports only overlaps deeper than ``tolerance`` (m)."""
+    out = copy.copy(model)
+    out.geom_margin[:] = -tolerance / 2.0
+    out.geom_gap[:] = 0.0
+    return out
+
+
 class ContactMonitor:
     """Labels, exclusions and queries over the collision geoms of ``compiled`` (module doc)."""
 
-    def __init__(self, compiled: CompiledCell, tolerance: float = DEFAULT_TOLERANCE) -> None:
-        m = compiled.model
+    def __init__(
+        self,
+        compiled: CompiledCell,
+        tolerance: float = DEFAULT_TOLERANCE,
+        model: mujoco.MjModel | None = None,
+    ) -> None:
+        m = compiled.model if model is None else model
         self.model = m
         self.tolerance = float(tolerance)
         self._robots = dict(compiled.robot_prefixes)

@@ -73,7 +73,7 @@ applied restores joints, clocks, speeds and timeline as they were before the com
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -91,7 +91,12 @@ from workcell.errors import (
 )
 from workcell.sim import profiles
 from workcell.sim.cartesian import CartesianCommands
-from workcell.sim.contacts import DEFAULT_TOLERANCE, ContactMonitor, Penetration
+from workcell.sim.contacts import (
+    DEFAULT_TOLERANCE,
+    ContactMonitor,
+    Penetration,
+    contact_model,
+)
 from workcell.sim.gripping import Carried, GraspRecord, GripperCommands, Hold
 from workcell.sim.profiles import step_times
 from workcell.sim.timeline import DEFAULT_MEMORY_LIMIT, Event, Timeline
@@ -102,6 +107,8 @@ MODES = ("path", "joint-by-joint", "playback")
 JOINT_BY_JOINT_CLOCKS = ("thesis", "sequential")
 
 Array = NDArray[np.float64]
+Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, hi)
+_EMIT_CHUNK = 16384  # frames built and emitted at a time
 
 
 class Simulator(CartesianCommands, GripperCommands):
@@ -168,7 +175,8 @@ class Simulator(CartesianCommands, GripperCommands):
         self.realtime = bool(realtime)
         self.joint_by_joint_clock = joint_by_joint_clock
         self.compiled = compile_cell(cell) if compiled is None else compiled
-        self.model: mujoco.MjModel = self.compiled.model
+        # the simulator's own copy (grasps write its eq_data; contacts use its margins)
+        self.model: mujoco.MjModel = contact_model(self.compiled.model, float(contact_tolerance))
         self.data = mujoco.MjData(self.model)
         mujoco.mj_kinematics(self.model, self.data)
         self._qadr: dict[str, NDArray[np.intp]] = {}
@@ -199,7 +207,7 @@ class Simulator(CartesianCommands, GripperCommands):
         self._holds: dict[str, Hold] = {}
         self.grasps: list[GraspRecord] = []  # every grasp and release, in order
         self._holders: dict[str, list[str]] = {p: [] for p in cell.movable_parts}
-        self.contacts = ContactMonitor(cc, contact_tolerance)
+        self.contacts = ContactMonitor(cc, contact_tolerance, self.model)
         self._touching: set[tuple[str, str]] = set()
         self.sim_time = 0.0
         self._wall = 0.0
@@ -387,8 +395,10 @@ class Simulator(CartesianCommands, GripperCommands):
             )
         return a
 
-    def _plan(self, name: str, q0: Array, target: Array) -> tuple[Array, Array]:
-        """Simulated times (k,) and joint values (k, dof) of a move, last row = target."""
+    def _plan(self, name: str, q0: Array, target: Array) -> tuple[Array, Rows]:
+        """Simulated times (k,) of a move and its joint values (k, dof; last row = target),
+        the latter as an array or, in path mode, a function of a row range (so a long
+        motion is never held in memory at once)."""
         speed, dt, prof, acc = self._speed[name], self.dt, self.profile, self.acceleration
         delta = target - q0
         big = float(np.max(np.abs(delta))) if len(delta) else 0.0
@@ -397,9 +407,16 @@ class Simulator(CartesianCommands, GripperCommands):
         if self.mode != "joint-by-joint":  # path and playback: eq. 4.27, 4.28
             T = profiles.duration(prof, big, speed, acc)
             t = step_times(T, dt)
-            Q = q0 + np.outer(profiles.progress(prof, t, T, big, speed, acc), delta)
-            Q[-1] = target
-            return self.sim_time + t, Q
+            s = profiles.progress(prof, t, T, big, speed, acc)
+            last = len(t) - 1
+
+            def rows(lo: int, hi: int) -> Array:
+                Q = q0 + np.outer(s[lo:hi], delta)
+                if hi > last:
+                    Q[last - lo] = target
+                return Q
+
+            return self.sim_time + t, rows
         times, rows = [], []
         q = q0.copy()
         clock = self.sim_time
@@ -430,19 +447,26 @@ class Simulator(CartesianCommands, GripperCommands):
         deg = ", ".join(f"{v:.6g}" for v in np.degrees(target))
         self._run(name, times, Qr, command, f"to ({deg}) deg")
 
-    def _run(self, name: str, times: Array, Qr: Array, command: str, detail: str) -> None:
-        """Emit a robot's planned frames (carrying what it holds) and log the move event."""
-        carried = self._carried(name) if len(times) else []
-        Q = np.repeat(self.data.qpos[None, :], len(times), axis=0)
-        Q[:, self._qadr[name]] = Qr
+    def _run(self, name: str, times: Array, Qr: Rows, command: str, detail: str) -> None:
+        """Emit a robot's planned frames (carrying what it holds) and log the move event.
+
+        Frames are built and emitted ``_EMIT_CHUNK`` at a time (bounded memory)."""
+        k = len(times)
+        carried = self._carried(name) if k else []
+        rows = Qr if callable(Qr) else (lambda lo, hi: Qr[lo:hi])
+        base, adr = self.data.qpos.copy(), self._qadr[name]
         t_before = self.sim_time
         with self._transaction():
-            self._emit(times, Q, carried, name)
+            for lo in range(0, k, _EMIT_CHUNK):
+                hi = min(k, lo + _EMIT_CHUNK)
+                Q = np.repeat(base[None, :], hi - lo, axis=0)
+                Q[:, adr] = rows(lo, hi)
+                self._emit(times[lo:hi], Q, carried, name)
             self.timeline.add_event(
                 self.sim_time,
                 name,
                 "move",
-                f"{command} {detail}: {len(times)} frames, {self.sim_time - t_before:.6g} s",
+                f"{command} {detail}: {k} frames, {self.sim_time - t_before:.6g} s",
             )
 
     def _emit(
