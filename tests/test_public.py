@@ -47,7 +47,15 @@ MODULES = [
     "workcell.sim",
     "workcell.sim.timeline",
     "workcell.sim.simulator",
+    "workcell.sim.cartesian",
+    "workcell.sim.contacts",
+    "workcell.sim.grasp",
+    "workcell.sim.gripping",
+    "workcell.sim.profiles",
+    "workcell.checks",
     "workcell.examples.thesis_joints",
+    "workcell.examples.thesis_pick_place",
+    "workcell.examples.thesis_handoff",
 ]
 
 
@@ -75,6 +83,7 @@ def test_readme_python_example_runs(tmp_path, monkeypatch, capsys):
     out = capsys.readouterr().out.split()
     # the README promises these printed values (thesis cube and parallelepiped)
     assert out[:3] == ["1.0", "6", "9.0"]
+    assert "cube" in out  # the simulator example grasps the cube
     assert (tmp_path / "parts.json").exists()
 
 

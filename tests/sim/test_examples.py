@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import json
 
 import numpy as np
 import pytest
@@ -94,3 +95,28 @@ def test_the_clock_is_the_sum_of_the_moves_durations():
         float(e.detail.rsplit(", ", 1)[1].split(" s")[0]) for e in sim.events if e.kind == "move"
     )
     assert total == pytest.approx(sim.sim_time, rel=1e-5)
+
+
+def test_demo_handoff_json(tmp_path, capsys):
+    from workcell.cli import main
+
+    assert main(["demo", "handoff", "--json", "--dt", "0.01", "--mjcf", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["collisions"] == 0
+    assert out["objects"][ho.SPHERE] == pytest.approx(ho.PLACE.tolist(), abs=1e-9)
+    kinds = [(e["robot"], e["kind"]) for e in out["events"] if e["kind"] in ("grasp", "release")]
+    assert kinds[0] == (ho.GIVER, "grasp")
+    assert kinds[-1] == (ho.RECEIVER, "release")
+    assert out["frames"] > 0
+    assert out["sim_time_s"] == pytest.approx(run("ho", "path").sim_time, rel=1e-9)
+    assert (tmp_path / "thesis_handoff.xml").exists()
+
+
+def test_demo_pick_place_human(capsys):
+    from workcell.cli import main
+
+    assert main(["demo", "pick-place", "--dt", "0.01"]) == 0
+    text = capsys.readouterr().out
+    assert "grasp 'cube'" in text
+    assert "0 collision(s)" in text
+    assert "cube ends at (0.2200, 0.2000, 0.5000) m" in text
