@@ -23,6 +23,7 @@ from workcell import solids
 from workcell.cell.workcell import Workcell
 from workcell.sim.grasp import tool_down
 from workcell.sim.simulator import Simulator
+from workcell.sim.tasks import approach_pose, pick, place
 from workcell.spatial import rot_z, translation
 
 __all__ = [
@@ -88,29 +89,20 @@ def side_grasp(position: np.ndarray) -> np.ndarray:
 
 def program(sim: Simulator) -> None:
     """The thesis's handoff program (with straight approach and retreat lines)."""
-    up = translation(0.0, 0.0, APPROACH)
-    back = translation(APPROACH, 0.0, 0.0)
     for robot in (GIVER, RECEIVER):
         sim.set_speed(robot, SPEED)
-    pick, give = tool_down(SPHERE_START), tool_down(HANDOFF)
-    take, place = side_grasp(HANDOFF), tool_down(PLACE)
-    sim.move_end_effector(GIVER, up @ pick, config=CONFIG)
-    sim.move_straight_line(GIVER, pick)
-    sim.close_gripper(GIVER)
-    sim.move_straight_line(GIVER, up @ pick)
-    sim.move_end_effector(RECEIVER, back @ take, config=CONFIG)
-    sim.move_end_effector(GIVER, up @ give, config=CONFIG)
+    give, take = tool_down(HANDOFF), side_grasp(HANDOFF)
+    pick(sim, GIVER, tool_down(SPHERE_START), approach=APPROACH, config=CONFIG)
+    sim.move_end_effector(RECEIVER, approach_pose(take, APPROACH), config=CONFIG)
+    sim.move_end_effector(GIVER, approach_pose(give, APPROACH), config=CONFIG)
     sim.move_straight_line(GIVER, give)
     sim.move_straight_line(RECEIVER, take)
     sim.close_gripper(RECEIVER)
     sim.open_gripper(GIVER)
-    sim.move_straight_line(GIVER, up @ give)
+    sim.move_straight_line(GIVER, approach_pose(give, APPROACH))
     sim.move_joints_absolute(GIVER, sim.cell.robots[GIVER].robot.poses["home"])
-    sim.move_straight_line(RECEIVER, back @ take)
-    sim.move_end_effector(RECEIVER, up @ place, config=CONFIG)
-    sim.move_straight_line(RECEIVER, place)
-    sim.open_gripper(RECEIVER)
-    sim.move_straight_line(RECEIVER, up @ place)
+    sim.move_straight_line(RECEIVER, approach_pose(take, APPROACH))
+    place(sim, RECEIVER, tool_down(PLACE), approach=APPROACH, config=CONFIG)
     sim.move_joints_absolute(RECEIVER, sim.cell.robots[RECEIVER].robot.poses["home"])
 
 

@@ -16,6 +16,7 @@ from workcell import solids
 from workcell.cell.workcell import Workcell
 from workcell.sim.grasp import tool_down
 from workcell.sim.simulator import Simulator
+from workcell.sim.tasks import pick, place
 from workcell.spatial import translation
 
 __all__ = [
@@ -86,17 +87,9 @@ def place_position() -> np.ndarray:
 
 def program(sim: Simulator) -> None:
     """The thesis's pick-and-place program (with straight approach and retreat lines)."""
-    up = translation(0.0, 0.0, APPROACH)
-    grasp, place = tool_down(grasp_position()), tool_down(place_position())
     sim.set_speed(ROBOT, SPEED)
-    sim.move_end_effector(ROBOT, up @ grasp, config=CONFIG)
-    sim.move_straight_line(ROBOT, grasp)
-    sim.close_gripper(ROBOT)
-    sim.move_straight_line(ROBOT, up @ grasp)
-    sim.move_end_effector(ROBOT, up @ place, config=CONFIG)
-    sim.move_straight_line(ROBOT, place)
-    sim.open_gripper(ROBOT)
-    sim.move_straight_line(ROBOT, up @ place)
+    pick(sim, ROBOT, tool_down(grasp_position()), approach=APPROACH, config=CONFIG)
+    place(sim, ROBOT, tool_down(place_position()), approach=APPROACH, config=CONFIG)
     sim.move_joints_absolute(ROBOT, sim.cell.robots[ROBOT].robot.poses["home"])
 
 
