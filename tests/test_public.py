@@ -52,6 +52,7 @@ MODULES = [
     "workcell.sim.grasp",
     "workcell.sim.gripping",
     "workcell.sim.profiles",
+    "workcell.sim.tasks",
     "workcell.checks",
     "workcell.examples.thesis_joints",
     "workcell.examples.thesis_pick_place",
