@@ -16,6 +16,8 @@ from workcell.errors import (
     ModelError,
     ProgramError,
     ProtocolError,
+    RecordError,
+    RenderError,
     UnreachableError,
     WorkcellError,
 )

@@ -15,7 +15,7 @@ __all__ = ["SUBCOMMAND_MODULES", "main"]
 # Modules that add their own subcommands: each has ``register(sub)``, which adds its
 # parsers to the ``argparse`` subparsers ``sub`` and sets ``func`` (args -> exit code).
 # Keep their top-level imports light: ``workcell --help`` imports every one of them.
-SUBCOMMAND_MODULES: tuple[str, ...] = ()
+SUBCOMMAND_MODULES: tuple[str, ...] = ("workcell.record.cli_render",)
 
 
 def _demo_solids(args: argparse.Namespace) -> int:

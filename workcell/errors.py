@@ -15,6 +15,8 @@ __all__ = [
     "ModelError",
     "ProgramError",
     "ProtocolError",
+    "RecordError",
+    "RenderError",
     "UnreachableError",
     "WorkcellError",
 ]
@@ -58,3 +60,11 @@ class ProgramError(WorkcellError):
 
 class ProtocolError(WorkcellError):
     """A remote-protocol message was malformed or broke the protocol."""
+
+
+class RenderError(WorkcellError):
+    """A picture or video could not be made (no OpenGL backend, bad size, closed renderer)."""
+
+
+class RecordError(WorkcellError):
+    """A recording could not be written or streamed (bad path, viewer unreachable)."""

@@ -120,3 +120,21 @@ def test_demo_pick_place_human(capsys):
     assert "grasp 'cube'" in text
     assert "0 collision(s)" in text
     assert "cube ends at (0.2200, 0.2000, 0.5000) m" in text
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_events_point_at_the_frame_that_shows_them(mode):
+    from workcell.examples import thesis_joints
+
+    sim = thesis_joints.run(mode, 0.01)
+    moves = [e for e in sim.events if e.kind == "move"]
+    counts = [int(e.detail.split(" frames")[0].rsplit(" ", 1)[1]) for e in moves]
+    assert [e.frame for e in moves] == list(np.cumsum(counts))  # frame 0 is the start
+    start, a, b = (
+        np.radians(d)
+        for d in (thesis_joints.START_DEG, thesis_joints.ABSOLUTE_DEG, thesis_joints.START_DEG)
+    )
+    Q = sim.timeline.qpos()
+    assert np.allclose(Q[moves[1].frame], a, atol=1e-12)
+    assert np.allclose(Q[moves[2].frame], b, atol=1e-12)
+    assert np.allclose(Q[moves[0].frame], start + np.radians(thesis_joints.RELATIVE_DEG))

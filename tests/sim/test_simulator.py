@@ -442,7 +442,8 @@ def test_demo_joints_json(tmp_path, capsys):
     assert data["objects"] == {}
     assert data["frames"] > 9890
     for e in data["events"]:
-        assert set(e) == {"t", "robot", "kind", "detail"}
+        assert set(e) == {"t", "robot", "kind", "detail", "frame"}
+        assert 0 <= e["frame"] < data["frames"]
     assert (tmp_path / "thesis_joints.xml").exists()
     assert data["mjcf"].endswith(".xml")
     assert main(["demo", "joints", "--json", "--mode", "joint-by-joint"]) == 0

@@ -38,17 +38,25 @@ Array = NDArray[np.float64]
 
 class Event(NamedTuple):
     """Something that happened at simulated time ``t`` (s): ``robot`` (None: the whole
-    cell), ``kind`` ("move", "wait", "grasp", "release", "collision", "error", ...) and a
-    human-readable ``detail``."""
+    cell), ``kind`` ("move", "wait", "grasp", "release", "collision", "error", ...), a
+    human-readable ``detail``, and ``frame``: the last frame on the timeline when it was
+    recorded (the frame showing its result; several frames may share one time)."""
 
     t: float
     robot: str | None
     kind: str
     detail: str
+    frame: int = -1
 
     def to_dict(self) -> dict[str, object]:
-        """The DESIGN.md ``{t, robot, kind, detail}`` object."""
-        return {"t": self.t, "robot": self.robot, "kind": self.kind, "detail": self.detail}
+        """The DESIGN.md ``{t, robot, kind, detail}`` object, plus ``frame``."""
+        return {
+            "t": self.t,
+            "robot": self.robot,
+            "kind": self.kind,
+            "detail": self.detail,
+            "frame": self.frame,
+        }
 
 
 class TimelineMark(NamedTuple):
@@ -256,7 +264,7 @@ class Timeline:
 
     def add_event(self, t: float, robot: str | None, kind: str, detail: str = "") -> Event:
         """Record an event and return it."""
-        e = Event(float(t), robot, str(kind), str(detail))
+        e = Event(float(t), robot, str(kind), str(detail), self._n - 1)
         self._events.append(e)
         return e
 

@@ -1,0 +1,660 @@
+"""Offscreen pictures of a workcell: PNGs of any frame, contact sheets of key frames, MP4 videos.
+
+Rendering uses MuJoCo's OpenGL renderer headless. The GL backend is ``MUJOCO_GL`` when
+set (``egl``, ``osmesa`` or ``glfw``); otherwise EGL is tried, then OSMesa; when none
+works a :class:`~workcell.errors.WorkcellError` (``RenderError``) says what each
+attempt gave. The backend is picked when the first GL context is created, not when
+``mujoco`` is imported: this module makes its contexts itself (``mujoco.Renderer`` binds
+the backend at ``import mujoco``, so setting ``MUJOCO_GL`` afterwards has no effect on
+it). Once a backend works it is kept for the process.
+
+Pictures show visual geometry only (collision pieces, group 3, and sites hidden), no
+shadows and no multisampling (about 15x cheaper on a CPU), a sun-like directional light
+plus the head light, and a soft sky where nothing is drawn. The default camera,
+:func:`overview_camera`, frames the visual geometry of the cell over a whole run, so
+robots and parts fill the picture without being clipped. Sizes are in pixels, times in
+seconds of simulated time.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import io
+import math
+import os
+import sys
+import tempfile
+from collections.abc import Iterable, Iterator, Sequence
+from fractions import Fraction
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, NamedTuple
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from workcell.errors import ModelError, RenderError
+from workcell.files import atomic_write_bytes
+
+if TYPE_CHECKING:
+    from workcell.cell.workcell import Workcell
+    from workcell.sim.simulator import Simulator
+
+__all__ = [
+    "KEY_EVENT_KINDS",
+    "CellRenderer",
+    "KeyFrame",
+    "contact_sheet",
+    "gl_backend",
+    "key_frames",
+    "overview_camera",
+    "render_cell",
+    "render_frame",
+    "save_mp4",
+    "save_png",
+    "video_frames",
+]
+
+KEY_EVENT_KINDS = ("move", "grasp", "release", "wait", "open", "close", "line", "path")
+_BACKENDS = ("egl", "osmesa", "glfw")
+_COLLISION_GROUP = 3
+_SKY_TOP = np.array([0.45, 0.56, 0.72])  # background gradient (RGB 0-1), top to horizon
+_SKY_HORIZON = np.array([0.74, 0.78, 0.84])
+_FLOOR_RGBA = np.array([0.46, 0.49, 0.54, 1.0])  # planes: darker than the pale arm links
+_GRID_RGBA = np.array([0.56, 0.59, 0.64, 1.0], np.float32)
+_backend: str | None = None
+
+Image = NDArray[np.uint8]
+
+
+# ---------------------------------------------------------------------- backend
+def _forget_pyopengl(platform_before: str | None) -> None:
+    """Unload PyOpenGL (its platform is fixed at import) so another backend can load it."""
+    for name in [n for n in sys.modules if n == "OpenGL" or n.startswith("OpenGL.")]:
+        del sys.modules[name]
+    for name in ("mujoco.egl", "mujoco.egl.egl_ext", "mujoco.osmesa"):
+        sys.modules.pop(name, None)
+    if platform_before is None:
+        os.environ.pop("PYOPENGL_PLATFORM", None)
+    else:
+        os.environ["PYOPENGL_PLATFORM"] = platform_before
+
+
+def _context_class(name: str) -> Any:
+    if name == "egl":
+        from mujoco.egl import GLContext
+    elif name == "osmesa":
+        from mujoco.osmesa import GLContext
+    else:
+        from mujoco.glfw import GLContext
+    return GLContext
+
+
+def _open_gl(model: mujoco.MjModel, width: int, height: int) -> tuple[Any, mujoco.MjrContext]:
+    """A current GL context and an offscreen MjrContext, choosing the backend on first use."""
+    global _backend
+    if _backend is not None:
+        names = [_backend]
+    else:
+        asked = os.environ.get("MUJOCO_GL", "").strip().lower()
+        if asked in ("disable", "disabled", "off", "false", "0"):
+            raise RenderError(f"rendering is disabled by MUJOCO_GL={asked!r}; unset it or use egl")
+        if asked in ("", "enable", "enabled", "on", "true", "1"):
+            names = ["egl", "osmesa"]
+        elif asked in (*_BACKENDS, "glx"):
+            names = [asked]
+        else:
+            raise RenderError(
+                f"MUJOCO_GL={asked!r} is not a rendering backend; valid: {', '.join(_BACKENDS)}"
+            )
+    failures = []
+    for name in names:
+        loaded = "OpenGL" in sys.modules
+        platform = os.environ.get("PYOPENGL_PLATFORM")
+        gl = None
+        try:
+            gl = _context_class(name)(width, height)
+            gl.make_current()
+            mjr = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150)
+        except Exception as exc:  # ImportError, RuntimeError, mujoco.FatalError, GLError ...
+            failures.append(f"{name}: {type(exc).__name__}: {str(exc).strip().rstrip('.')}")
+            if gl is not None:
+                _free(gl)
+            if not loaded and _backend is None:
+                _forget_pyopengl(platform)
+            continue
+        _backend = name
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, mjr)
+        return gl, mjr
+    how = "MUJOCO_GL" if len(names) == 1 else "no MUJOCO_GL set; tried"
+    raise RenderError(
+        f"no OpenGL backend works for offscreen rendering ({how} {', '.join(names)}): "
+        + "; ".join(failures)
+        + ". On Linux install libegl1 and libegl-mesa0 (egl) or libosmesa6 (osmesa), leave "
+        "PYOPENGL_PLATFORM unset, and set MUJOCO_GL=egl or MUJOCO_GL=osmesa"
+    )
+
+
+def _free(gl: Any) -> None:
+    with contextlib.suppress(Exception):  # a half-made context may not free cleanly
+        gl.free()
+
+
+def gl_backend() -> str | None:
+    """The GL backend in use ("egl", "osmesa", "glfw"), or None before the first render."""
+    return _backend
+
+
+# ---------------------------------------------------------------------- renderer
+class CellRenderer:
+    """An offscreen renderer of one model at ``width`` x ``height`` pixels.
+
+    Draws from a private copy of the model (the caller's is not changed) in the module's
+    style: visual groups only, no shadows or MSAA, a sun and the head light, a blue-grey
+    floor with a grid and a sky with matching fog, unless the model brings its own floor
+    material or skybox. Use it as a context manager or call :meth:`close`: a GL context
+    left to the garbage collector at interpreter exit prints EGL errors.
+    """
+
+    def __init__(self, model: mujoco.MjModel, width: int = 640, height: int = 480) -> None:
+        for what, v in (("width", width), ("height", height)):
+            if not (isinstance(v, (int, np.integer)) and 8 <= v <= 8192):
+                raise RenderError(f"{what} must be an integer in [8, 8192] pixels, got {v!r}")
+        self.width, self.height = int(width), int(height)
+        m = copy.copy(model)
+        m.vis.global_.offwidth = max(self.width, m.vis.global_.offwidth)
+        m.vis.global_.offheight = max(self.height, m.vis.global_.offheight)
+        m.vis.quality.offsamples = 0
+        m.vis.headlight.ambient[:] = 0.32
+        m.vis.headlight.diffuse[:] = 0.38
+        m.vis.headlight.specular[:] = 0.08
+        self._sky = not np.any(m.tex_type == mujoco.mjtTexture.mjTEXTURE_SKYBOX)
+        m.vis.rgba.fog[:3] = _SKY_HORIZON
+        planes = (m.geom_type == mujoco.mjtGeom.mjGEOM_PLANE) & (m.geom_matid < 0)
+        m.geom_rgba[planes] = _FLOOR_RGBA
+        self.model = m
+        self.option = mujoco.MjvOption()
+        self.option.geomgroup[_COLLISION_GROUP:] = 0
+        self.option.sitegroup[:] = 0
+        self.scene = mujoco.MjvScene(m, maxgeom=max(1000, 2 * m.ngeom))
+        self._rect = mujoco.MjrRect(0, 0, self.width, self.height)
+        self._gl, self._mjr = _open_gl(m, self.width, self.height)
+        self._depth = np.empty((self.height, self.width), np.float32)
+        t = np.linspace(0.0, 1.0, self.height)[:, None] ** 0.7
+        self._sky_rows = ((1 - t) * _SKY_TOP + t * _SKY_HORIZON) * 255  # (H, 3)
+        self._grid = _floor_grid(m)
+
+    def camera(self, name: str) -> mujoco.MjvCamera:
+        """The model's fixed camera ``name``; ModelError listing the cameras if unknown."""
+        cid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, name)
+        if cid < 0:
+            known = [self.model.camera(i).name for i in range(self.model.ncam)]
+            raise ModelError(
+                f"no camera {name!r} in the cell; cameras: {', '.join(known) or 'none'}"
+            )
+        cam = mujoco.MjvCamera()
+        cam.type, cam.fixedcamid = mujoco.mjtCamera.mjCAMERA_FIXED, cid
+        return cam
+
+    def render(self, data: mujoco.MjData, camera: str | mujoco.MjvCamera) -> Image:
+        """An (H, W, 3) uint8 picture of ``data`` (poses as computed by mj_forward)."""
+        if self._mjr is None:
+            raise RenderError("the renderer is closed")
+        cam = self.camera(camera) if isinstance(camera, str) else camera
+        mujoco.mjv_updateScene(
+            self.model, data, self.option, None, cam, mujoco.mjtCatBit.mjCAT_ALL, self.scene
+        )
+        self.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+        self.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
+        self.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = True
+        self._add_grid()
+        self._set_lights()
+        # fog (m): from just past the cell to a few extents behind it, whatever the camera
+        ext = max(float(self.model.stat.extent), 0.1)
+        dist = float(np.linalg.norm(np.array(self.scene.camera[0].pos) - self.model.stat.center))
+        self._mjr.fogStart, self._mjr.fogEnd = dist + 0.8 * ext, dist + 2.5 * ext
+        self._gl.make_current()
+        mujoco.mjr_render(self._rect, self.scene, self._mjr)
+        img = np.empty((self.height, self.width, 3), np.uint8)
+        mujoco.mjr_readPixels(img, self._depth if self._sky else None, self._rect, self._mjr)
+        img = np.flipud(img)
+        if self._sky:  # nothing drawn (depth at the far plane): a sky gradient
+            empty = np.flipud(self._depth) >= 1.0
+            rows = np.broadcast_to(self._sky_rows[:, None, :], img.shape)
+            img[empty] = rows[empty].astype(np.uint8)
+        return np.ascontiguousarray(img)
+
+    def _set_lights(self) -> None:
+        """The cell's lights become one sun, from above and behind the camera's left."""
+        scn = self.scene
+        f = np.array(scn.camera[0].forward, dtype=np.float64)
+        side = np.cross(f, [0.0, 0.0, 1.0])
+        d = f + 0.6 * side / max(np.linalg.norm(side), 1e-9) + np.array([0.0, 0.0, -1.3])
+        for k in range(scn.nlight):
+            light = scn.lights[k]
+            if light.headlight:
+                continue
+            light.type = mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
+            light.dir = d / np.linalg.norm(d)
+            light.diffuse, light.specular, light.ambient = [0.55] * 3, [0.15] * 3, [0.0] * 3
+
+    def _add_grid(self) -> None:
+        """Grid lines on the floor plane (scene-only geoms, no effect on the model)."""
+        scn = self.scene
+        n = min(len(self._grid), scn.maxgeom - scn.ngeom)
+        for k in range(n):
+            a, b = self._grid[k]
+            g = scn.geoms[scn.ngeom + k]
+            mujoco.mjv_initGeom(
+                g,
+                mujoco.mjtGeom.mjGEOM_LINE,
+                np.zeros(3),
+                np.zeros(3),
+                np.eye(3).ravel(),
+                _GRID_RGBA,
+            )
+            mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_LINE, 1.0, a, b)
+        scn.ngeom += n
+
+    def close(self) -> None:
+        """Free the GL resources (idempotent)."""
+        if self._mjr is not None:
+            self._mjr.free()
+            self._mjr = None
+        if self._gl is not None:
+            _free(self._gl)
+            self._gl = None
+
+    def __enter__(self) -> CellRenderer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        if getattr(self, "_mjr", None) is not None:
+            self.close()
+
+
+def _nice(x: float) -> float:
+    """The 1-2-5 step nearest below x."""
+    e = 10 ** math.floor(math.log10(x))
+    return e * max(v for v in (1, 2, 5) if v * e <= x)
+
+
+def _floor_grid(m: mujoco.MjModel) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """Segments of a square grid on the first horizontal plane geom (none: no segments).
+
+    It covers the model's extent around its centre, spacing a 1-2-5 step near extent/5.
+    """
+    planes = np.flatnonzero(m.geom_type == mujoco.mjtGeom.mjGEOM_PLANE)
+    data = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, data)
+    for g in planes:
+        if m.geom_matid[g] >= 0:  # the floor has its own material (a grid texture, say)
+            return []
+        if m.geom_group[g] < _COLLISION_GROUP and data.geom_xmat[g][8] > 1 - 1e-9:
+            z = float(data.geom_xpos[g][2]) + 1e-3
+            break
+    else:
+        return []
+    ext = max(float(m.stat.extent), 0.1)
+    step = _nice(ext / 5)
+    cx, cy = (round(float(v) / step) * step for v in m.stat.center[:2])
+    k = math.ceil(2.5 * ext / step)
+    ticks = np.arange(-k, k + 1) * step
+    out = []
+    for t in ticks:
+        out.append((np.array([cx + t, cy - k * step, z]), np.array([cx + t, cy + k * step, z])))
+        out.append((np.array([cx - k * step, cy + t, z]), np.array([cx + k * step, cy + t, z])))
+    return out
+
+
+# ---------------------------------------------------------------------- camera
+def _visual_points(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
+    """World corners (8 per geom) of the bounding boxes of the visible non-plane geoms."""
+    keep = (
+        (model.geom_group < _COLLISION_GROUP)
+        & (model.geom_type != mujoco.mjtGeom.mjGEOM_PLANE)
+        & (model.geom_rgba[:, 3] > 0)
+    )
+    idx = np.flatnonzero(keep)
+    if len(idx) == 0:
+        return np.empty((0, 3))
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    aabb = model.geom_aabb[idx]  # centre (3), half sizes (3) in the geom frame
+    local = aabb[:, None, :3] + signs[None] * aabb[:, None, 3:]  # (k, 8, 3)
+    R = data.geom_xmat[idx].reshape(-1, 3, 3)
+    world = np.einsum("kij,kpj->kpi", R, local) + data.geom_xpos[idx][:, None, :]
+    return world.reshape(-1, 3)
+
+
+def overview_camera(
+    model: mujoco.MjModel,
+    qpos: Iterable[NDArray[np.float64]] | None = None,
+    *,
+    width: int = 640,
+    height: int = 480,
+    azimuth: float | None = None,
+    elevation: float = -24.0,
+    margin: float = 0.06,
+) -> mujoco.MjvCamera:
+    """A free camera that frames the cell's visual geometry in every pose of ``qpos``.
+
+    ``qpos``: the configurations to cover (default: ``qpos0``). The camera looks down
+    ``elevation`` degrees from a three-quarter ``azimuth`` (default: across the cell's
+    longer horizontal side); its distance and look-at point put the projected geometry
+    within ``margin`` (fraction of the half size) of the picture's edges for a
+    ``width`` x ``height`` picture with the model's vertical field of view.
+    """
+    data = mujoco.MjData(model)
+    pts = []
+    for q in [model.qpos0] if qpos is None else qpos:
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        pts.append(_visual_points(model, data))
+    P = np.concatenate(pts) if pts else np.empty((0, 3))
+    cam = mujoco.MjvCamera()
+    mujoco.mjv_defaultFreeCamera(model, cam)
+    if len(P) == 0:
+        return cam
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    if azimuth is None:
+        azimuth = 60.0 if hi[0] - lo[0] >= hi[1] - lo[1] else 150.0
+    az, el = math.radians(azimuth), math.radians(elevation)
+    f = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    u = np.array([-math.sin(el) * math.cos(az), -math.sin(el) * math.sin(az), math.cos(el)])
+    r = np.cross(f, u)
+    tv = math.tan(math.radians(model.vis.global_.fovy) / 2) * (1 - margin)
+    th = tv * width / height
+    c = (lo + hi) / 2
+    for i in range(6):  # fit the distance, then centre the projection; the last fit stays
+        x, y, z = (P - c) @ r, (P - c) @ u, (P - c) @ f
+        d = float(max(np.max(np.abs(x) / th - z), np.max(np.abs(y) / tv - z)))
+        if i == 5:
+            break
+        px, py = x / np.maximum(z + d, 1e-9), y / np.maximum(z + d, 1e-9)
+        c = c + (r * (px.max() + px.min()) + u * (py.max() + py.min())) / 2 * d
+    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+    cam.lookat[:] = c
+    cam.distance = d
+    cam.azimuth, cam.elevation = azimuth, elevation
+    return cam
+
+
+# ---------------------------------------------------------------------- frames
+def _frames_qpos(sim: Simulator, frames: Sequence[int]) -> Iterator[NDArray[np.float64]]:
+    """qpos of ``frames`` (ascending, non-negative), one pass over the timeline's blocks."""
+    want = list(frames)
+    k = 0
+    for start, rows in sim.timeline.iter_blocks(want[0] if want else 0):
+        while k < len(want) and want[k] < start + len(rows):
+            yield rows[want[k] - start, 2:].copy()
+            k += 1
+        if k == len(want):
+            return
+
+
+def _sample_frames(sim: Simulator, n: int = 64) -> list[int]:
+    """n frames evenly over the run plus every key frame (the poses a camera must cover)."""
+    total = sim.frames
+    even = np.linspace(0, total - 1, min(n, total)).round().astype(int).tolist()
+    return sorted({*even, *(k.frame for k in key_frames(sim)), total - 1})
+
+
+def _camera_for(
+    sim: Simulator, camera: str | None, width: int, height: int
+) -> str | mujoco.MjvCamera:
+    if camera is not None:
+        return camera
+    return overview_camera(
+        sim.model, _frames_qpos(sim, _sample_frames(sim)), width=width, height=height
+    )
+
+
+def _check_frame(sim: Simulator, frame: int) -> int:
+    n = sim.frames
+    if not (isinstance(frame, (int, np.integer)) and -n <= frame < n):
+        raise ModelError(f"frame {frame!r} out of range: the timeline has {n} frames")
+    return int(frame) % n
+
+
+def render_frame(
+    sim: Simulator,
+    frame: int = -1,
+    *,
+    camera: str | None = None,
+    width: int = 640,
+    height: int = 480,
+) -> Image:
+    """The cell at timeline ``frame`` (negative counts from the end) as (H, W, 3) uint8.
+
+    ``camera``: a camera of the cell by name, or None for :func:`overview_camera` over
+    the whole run (the same view for every frame of a run).
+    """
+    i = _check_frame(sim, frame)
+    cam = _camera_for(sim, camera, width, height)
+    data = mujoco.MjData(sim.model)
+    data.qpos[:] = sim.timeline.frame(i)[2]
+    mujoco.mj_forward(sim.model, data)
+    with CellRenderer(sim.model, width, height) as r:
+        return r.render(data, cam)
+
+
+def render_cell(
+    cell: Workcell, *, camera: str | None = None, width: int = 640, height: int = 480
+) -> Image:
+    """The cell in its initial state (no simulation) as (H, W, 3) uint8; see :func:`render_frame`."""
+    from workcell.cell.compile import compile_cell
+
+    model = compile_cell(cell).model
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    cam = camera if camera is not None else overview_camera(model, width=width, height=height)
+    with CellRenderer(model, width, height) as r:
+        return r.render(data, cam)
+
+
+def _png_bytes(image: NDArray[np.uint8]) -> bytes:
+    from PIL import Image as PILImage
+
+    buf = io.BytesIO()
+    PILImage.fromarray(np.asarray(image, dtype=np.uint8)).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def save_png(image: NDArray[np.uint8], path: str | os.PathLike) -> Path:
+    """Write an (H, W, 3) or (H, W) uint8 image as PNG, atomically; return the path."""
+    a = np.asarray(image)
+    if a.dtype != np.uint8 or a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (3, 4)):
+        raise RenderError(f"image must be (H, W[, 3|4]) uint8, got {a.shape} {a.dtype}")
+    p = Path(path)
+    atomic_write_bytes(p, _png_bytes(a))
+    return p
+
+
+# ---------------------------------------------------------------------- contact sheet
+class KeyFrame(NamedTuple):
+    """A tile of a contact sheet: timeline ``frame``, its simulated time ``t`` (s), a
+    ``title`` (robot and command: the first word of the event's detail, else its kind)
+    and the rest of the event's ``detail``."""
+
+    frame: int
+    t: float
+    title: str
+    detail: str
+
+
+def key_frames(sim: Simulator, kinds: Sequence[str] = KEY_EVENT_KINDS) -> list[KeyFrame]:
+    """Frame 0 and the end of each command (events of ``kinds``), in order.
+
+    An event maps to its ``frame`` (the last frame when it was recorded), exact in every
+    mode, or, for events without one, to the last frame whose simulated time is at most
+    the event's (1e-9 s).
+    """
+    times = sim.timeline.sim_times()
+    out = [KeyFrame(0, float(times[0]), "initial state", "")]
+    for e in sim.events:
+        if e.kind not in kinds:
+            continue
+        i = getattr(e, "frame", -1)
+        if i < 0:
+            i = max(int(np.searchsorted(times, e.t + 1e-9, side="right")) - 1, 0)
+        command, _, rest = e.detail.partition(" ")
+        if not command.isidentifier():
+            command, rest = e.kind, e.detail
+        title = f"{e.robot}: {command}" if e.robot else command
+        out.append(KeyFrame(i, float(times[i]), title, rest))
+    return out
+
+
+def _font(size: int) -> Any:
+    from PIL import ImageFont
+
+    try:
+        return ImageFont.load_default(size=size)
+    except TypeError:  # Pillow < 10.1: a fixed bitmap font
+        return ImageFont.load_default()
+
+
+def _fit(draw: Any, text: str, font: Any, width: float) -> str:
+    if draw.textlength(text, font=font) <= width:
+        return text
+    while text and draw.textlength(text + "…", font=font) > width:
+        text = text[:-1]
+    return text + "…"
+
+
+def contact_sheet(
+    sim: Simulator,
+    path: str | os.PathLike,
+    *,
+    camera: str | None = None,
+    tile_width: int = 320,
+    tile_height: int = 240,
+    columns: int | None = None,
+    kinds: Sequence[str] = KEY_EVENT_KINDS,
+) -> list[KeyFrame]:
+    """Write a PNG grid of :func:`key_frames`, each tile captioned with its time and command.
+
+    Tiles are ``tile_width`` x ``tile_height`` renders (one camera for all, see
+    :func:`render_frame`) above a two-line caption; ``columns`` defaults to
+    ceil(sqrt(n)). Returns the key frames in tile order (row by row).
+    """
+    from PIL import Image as PILImage
+    from PIL import ImageDraw
+
+    keys = key_frames(sim, kinds)
+    n = len(keys)
+    cols = columns if columns else math.ceil(math.sqrt(n))
+    if not (isinstance(cols, int) and cols >= 1):
+        raise RenderError(f"columns must be an integer >= 1, got {columns!r}")
+    rows = math.ceil(n / cols)
+    fsize = max(9, tile_height // 18)
+    cap_h, gap = 2 * fsize + 10, 4
+    sheet = PILImage.new(
+        "RGB",
+        (cols * tile_width + (cols + 1) * gap, rows * (tile_height + cap_h) + (rows + 1) * gap),
+        "white",
+    )
+    draw, font = ImageDraw.Draw(sheet), _font(fsize)
+    cam = _camera_for(sim, camera, tile_width, tile_height)
+    data = mujoco.MjData(sim.model)
+    order = sorted(range(n), key=lambda k: keys[k].frame)
+    qs = dict(zip(order, _frames_qpos(sim, [keys[k].frame for k in order]), strict=True))
+    with CellRenderer(sim.model, tile_width, tile_height) as r:
+        for k, key in enumerate(keys):
+            data.qpos[:] = qs[k]
+            mujoco.mj_forward(sim.model, data)
+            x = gap + (k % cols) * (tile_width + gap)
+            y = gap + (k // cols) * (tile_height + cap_h + gap)
+            sheet.paste(PILImage.fromarray(r.render(data, cam)), (x, y))
+            line1 = _fit(draw, f"{k}.  t = {key.t:.2f} s   {key.title}", font, tile_width - 6)
+            line2 = _fit(draw, key.detail, font, tile_width - 6)
+            draw.text((x + 3, y + tile_height + 3), line1, fill=(20, 20, 20), font=font)
+            draw.text((x + 3, y + tile_height + 5 + fsize), line2, fill=(90, 90, 90), font=font)
+    buf = np.asarray(sheet)
+    save_png(buf, path)
+    return keys
+
+
+# ---------------------------------------------------------------------- video
+@contextlib.contextmanager
+def _atomic_target(path: Path) -> Iterator[str]:
+    """A temp file beside ``path`` that replaces it (fsync, usual mode) when the block succeeds."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield tmp
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def video_frames(sim: Simulator, fps: float) -> NDArray[np.intp]:
+    """Timeline frame shown at each video frame: samples every 1/fps s of simulated time
+    from 0 to the end (the last sample is the final frame), ceil(T fps) + 1 of them."""
+    times = sim.timeline.sim_times()
+    T = float(times[-1] - times[0])
+    n = math.ceil(T * fps - 1e-9) + 1
+    ts = np.minimum(times[0] + np.arange(n) / fps, times[-1])
+    return np.maximum(np.searchsorted(times, ts + 1e-9, side="right") - 1, 0)
+
+
+def save_mp4(
+    sim: Simulator,
+    path: str | os.PathLike,
+    *,
+    fps: float = 30.0,
+    camera: str | None = None,
+    width: int = 640,
+    height: int = 480,
+    crf: int = 20,
+    progress: bool | None = None,
+) -> int:
+    """Write an H.264 MP4 of the run in simulated time (``fps`` samples per simulated s).
+
+    ``width`` and ``height`` must be even (yuv420p). ``progress``: a tqdm bar on stderr
+    (default: when stderr is a terminal). Written atomically. Returns the number of
+    video frames, ``ceil(T * fps) + 1`` for a run of T simulated seconds.
+    """
+    import av
+    from tqdm import tqdm
+
+    if not (fps > 0 and math.isfinite(fps)):
+        raise RenderError(f"fps must be a finite number > 0, got {fps!r}")
+    if width % 2 or height % 2:
+        raise RenderError(f"MP4 width and height must be even, got {width} x {height}")
+    idx = video_frames(sim, fps)
+    cam = _camera_for(sim, camera, width, height)
+    show = sys.stderr.isatty() if progress is None else progress
+    data = mujoco.MjData(sim.model)
+    p = Path(path)
+    with (
+        CellRenderer(sim.model, width, height) as r,
+        _atomic_target(p) as tmp,
+        av.open(tmp, mode="w", format="mp4") as out,
+    ):
+        stream = out.add_stream("libx264", rate=Fraction(fps).limit_denominator(1000))
+        stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
+        stream.options = {"crf": str(crf), "preset": "veryfast"}
+        qs = _frames_qpos(sim, sorted(set(idx.tolist())))  # idx never decreases: one pass
+        img, last = None, -1
+        for i in tqdm(idx.tolist(), disable=not show, unit="frame", desc="mp4"):
+            if i != last:
+                data.qpos[:] = next(qs)
+                mujoco.mj_forward(sim.model, data)
+                img, last = r.render(data, cam), i
+            for packet in stream.encode(av.VideoFrame.from_ndarray(img, format="rgb24")):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    return len(idx)
