@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/workcell demo solids --save thesis_solids.json
+	MUJOCO_GL=$${MUJOCO_GL:-egl} $(BIN)/workcell demo handoff --dt 0.005 --save handoff.rrd --render handoff.png
 
 test: $(STAMP)
 	$(BIN)/ruff check .

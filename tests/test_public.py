@@ -94,6 +94,10 @@ def test_readme_starts_with_the_two_commands():
     assert block[0].startswith("make demo")
     assert block[1].startswith("make test")
     assert "make test" in (ROOT / ".ci" / "run").read_text()
+    demo = (ROOT / "Makefile").read_text().split("\ndemo:")[1].split("\n\n")[0]
+    assert "workcell demo handoff" in demo
+    assert "--save handoff.rrd" in demo
+    assert "--render handoff.png" in demo
 
 
 def test_demo_solids_json(tmp_path, capsys):

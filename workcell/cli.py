@@ -84,11 +84,21 @@ def _demo_cell(args: argparse.Namespace) -> int:
     if args.save:
         from workcell.record import record
 
-        out["rrd"] = str(record(result, args.save, progress=not args.json))
+        stats = record(result, args.save, progress=None if args.json else True)
+        out["rrd"] = str(stats.path)
+        out["rrd_bytes"] = stats.bytes
     if args.render:
-        from workcell.record import render_frame, save_png
+        from workcell.record import contact_sheet
 
-        out["png"] = str(save_png(render_frame(result, -1), args.render))
+        # the key moments: the start and every grasp and release (moves when none)
+        kinds = ("grasp", "release")
+        if not any(e.kind in kinds for e in result.events):
+            kinds = ("move",)
+        keys = contact_sheet(
+            result, args.render, kinds=kinds, tile_width=400, tile_height=300, columns=5
+        )
+        out["png"] = str(Path(args.render))
+        out["png_frames"] = [k.frame for k in keys]
     elapsed = time.perf_counter() - t0
     if args.json:
         print(json.dumps(out))
@@ -115,7 +125,8 @@ def _demo_cell(args: argparse.Namespace) -> int:
             f"cell written to {out['mjcf']} (open it with: python -m mujoco.viewer --mjcf {out['mjcf']})"
         )
     if out.get("rrd"):
-        print(f"recording written to {out['rrd']} (open it with: rerun {out['rrd']})")
+        mb = (out.get("rrd_bytes") or 0) / 1e6
+        print(f"recording written to {out['rrd']} ({mb:.1f} MB; open it with: rerun {out['rrd']})")
     if out.get("png"):
         print(f"picture written to {out['png']}")
     return 0
@@ -172,7 +183,11 @@ def main(argv: list[str] | None = None) -> int:
         metavar="FILE",
         help="solids: save the model (JSON) to FILE; cells: record the run to FILE.rrd",
     )
-    demo.add_argument("--render", metavar="FILE.png", help="render the last frame to a PNG")
+    demo.add_argument(
+        "--render",
+        metavar="FILE.png",
+        help="a picture of the run: the start and every grasp and release, side by side",
+    )
     demo.add_argument(
         "--json", action="store_true", help="print one JSON object instead of a table"
     )

@@ -171,7 +171,9 @@ class GripperCommands:
             else:
                 others = self._holders[hold.part]
                 to = f", now carried by '{others[0]}'" if others else ""
-                where = ", ".join(f"{v:.4g}" for v in self.part_pose(hold.part)[:3, 3])
+                where = ", ".join(
+                    f"{round(v, 4) + 0.0:.4f}" for v in self.part_pose(hold.part)[:3, 3]
+                )
                 self.timeline.add_event(
                     self.sim_time, name, "release", f"release '{hold.part}' at ({where}) m{to}"
                 )

@@ -1,0 +1,522 @@
+"""Record a finished simulation's timeline to rerun: an ``.rrd`` file or a live viewer.
+
+:func:`record` writes the whole :class:`~workcell.sim.timeline.Timeline` of a
+:class:`~workcell.sim.simulator.Simulator`; :func:`log_timeline` is its core and logs into
+any :class:`rerun.RecordingStream` (file, spawned viewer, connected viewer: one code path).
+
+Layout of the recording (entity paths; names escaped with ``rr.escape_entity_path_part``):
+
+- ``/world``: right-handed, z up, metres;
+- ``/world/bodies/{body}``: the body's world pose (``Transform3D``, quaternion xyzw) per
+  frame; bodies welded to the world (robot bases) get one static pose, and the world
+  body (``/world/bodies/world``: ground, static parts, cameras) none;
+- ``/world/bodies/{body}/{geom}``: static geometry in the body frame (``Mesh3D`` from the
+  compiled model's meshes with flat face normals, primitives, the ground as a quad);
+  collision-only geoms (group 3) are skipped; cameras as ``Pinhole`` frusta (MuJoCo's -z
+  view axis, y up);
+- ``/world/tool_paths/{robot}``: the tool-centre point's path, one segment per frame
+  (previous point -> this point; the blueprint shows all segments up to the cursor);
+- ``/joints/{robot}``: the robot's joint values, one named series per joint (``Scalars``
+  with one value per joint, in DH order): **degrees** for revolute joints, metres for
+  prismatic ones (each series name says its unit, e.g. ``"j2 (deg)"``);
+- ``/gripper/{robot}``: 1 while the robot holds a part (from its ``grasp`` event to its
+  ``release`` event), else 0; logged at the changes, the start and the end;
+- ``/events``: every timeline event as a ``TextLog`` (``error``: ERROR, ``collision``:
+  WARN, ``grasp``/``release``: INFO, ``move``/``wait``/``speed``: DEBUG, others: INFO).
+
+Timelines: ``frame`` (sequence: the frame index), ``sim_time`` (duration, integer ns: the
+simulated clock; frames may share one, e.g. under joint-by-joint mode's thesis clock) and
+``wall_time`` (duration, integer ns: the simulator's stopwatch). An event sits on its
+``frame`` (the last frame when it happened), at its own simulated time and that frame's
+wall time; an event without a frame (-1) on the last frame whose simulated time is <= its
+time.
+
+Body poses come from ``mujoco.mj_kinematics`` on the frame's full ``qpos`` in a scratch
+``MjData`` (the simulator's own data is not touched). The timeline is read block by block
+(:meth:`~workcell.sim.timeline.Timeline.iter_blocks`, spilled blocks included) and sent in
+batches of ``chunk_frames`` frames with ``send_columns``, so memory stays bounded.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+import pyarrow as pa
+import rerun as rr
+import rerun.blueprint as rrb
+from numpy.typing import ArrayLike, NDArray
+from tqdm import tqdm
+
+from workcell.errors import RecordError
+from workcell.robots.mjcf import COLLISION_GROUP
+from workcell.spatial import wxyz_to_xyzw
+
+if TYPE_CHECKING:
+    from workcell.sim.simulator import Simulator
+
+__all__ = [
+    "DEFAULT_CHUNK_FRAMES",
+    "RecordError",
+    "RecordStats",
+    "body_entity",
+    "default_blueprint",
+    "gripper_entity",
+    "joint_entity",
+    "log_timeline",
+    "record",
+    "tool_path_entity",
+]
+
+WORLD = "/world"
+BODIES = "/world/bodies"
+TOOL_PATHS = "/world/tool_paths"
+JOINTS = "/joints"
+GRIPPERS = "/gripper"
+EVENTS = "/events"
+DEFAULT_CHUNK_FRAMES = 8192
+DEFAULT_PORT = 9876
+_LEVELS = {"error": "ERROR", "collision": "WARN", "grasp": "INFO", "release": "INFO"}
+_LEVELS |= {"move": "DEBUG", "wait": "DEBUG", "speed": "DEBUG"}
+_PALETTE = [(230, 80, 40), (40, 120, 230), (40, 170, 80), (200, 60, 200), (220, 180, 30)]
+_GEOM = mujoco.mjtGeom
+_STRIP_TYPE = rr.components.LineStrip3DBatch._ARROW_DATATYPE
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RecordStats:
+    """What :func:`record` wrote: ``frames`` and ``events`` logged, ``moving_bodies``
+    (bodies with a pose per frame), ``seconds`` (wall time of the recording, s),
+    ``path`` and ``bytes`` (the ``.rrd`` file and its size; None when only streamed)."""
+
+    frames: int
+    events: int
+    moving_bodies: int
+    seconds: float
+    path: Path | None = None
+    bytes: int | None = None
+
+
+def _part(name: str) -> str:
+    return rr.escape_entity_path_part(name)
+
+
+def body_entity(body: str) -> str:
+    """Entity path of a MuJoCo body (its world pose)."""
+    return f"{BODIES}/{_part(body)}"
+
+
+def joint_entity(robot: str) -> str:
+    """Entity path of a robot's joint value series (one series per joint)."""
+    return f"{JOINTS}/{_part(robot)}"
+
+
+def gripper_entity(robot: str) -> str:
+    """Entity path of a robot's gripper state series (1 closed on a part, 0 open)."""
+    return f"{GRIPPERS}/{_part(robot)}"
+
+
+def tool_path_entity(robot: str) -> str:
+    """Entity path of a robot's tool path segments."""
+    return f"{TOOL_PATHS}/{_part(robot)}"
+
+
+def _ns(seconds: Array) -> NDArray[np.timedelta64]:
+    """Seconds -> integer nanoseconds as ``timedelta64[ns]`` (rounded, never truncated)."""
+    return np.rint(np.asarray(seconds) * 1e9).astype(np.int64).astype("timedelta64[ns]")
+
+
+def _index(frames: ArrayLike, sim_t: ArrayLike, wall_t: ArrayLike) -> list[rr.TimeColumn]:
+    """The three timelines of rows: frame indices, simulated and wall clocks (s)."""
+    return [
+        rr.TimeColumn("frame", sequence=np.asarray(frames, dtype=np.int64)),
+        rr.TimeColumn("sim_time", duration=_ns(sim_t)),
+        rr.TimeColumn("wall_time", duration=_ns(wall_t)),
+    ]
+
+
+def _rgba(model: mujoco.MjModel, g: int) -> NDArray[np.uint8]:
+    rgba = model.geom_rgba[g]
+    mat = model.geom_matid[g]
+    if mat >= 0 and np.allclose(rgba, (0.5, 0.5, 0.5, 1.0)):  # MuJoCo: material unless set
+        rgba = model.mat_rgba[mat]
+    return np.round(np.clip(rgba, 0, 1) * 255).astype(np.uint8)
+
+
+# ---------------------------------------------------------------------- layout
+@dataclass
+class _Layout:
+    """Names and indices of what is logged, from the compiled model."""
+
+    moving: list[tuple[int, str]]  # (body id, entity) with a pose per frame
+    static: list[tuple[int, str]]  # bodies welded to the world (not the world body)
+    joints: list[tuple[str, NDArray[np.intp], NDArray[np.bool_], list[str]]]
+    # (entity, qpos addresses, revolute, series names) per robot
+    tools: list[tuple[str, int, str]]  # (robot, site id, entity)
+    grippers: list[str]  # robots with a gripper
+
+    @classmethod
+    def of(cls, sim: Simulator) -> _Layout:
+        m, c = sim.model, sim.compiled
+        names = [m.body(b).name or f"body{b}" for b in range(m.nbody)]
+        moving = [(b, body_entity(names[b])) for b in range(1, m.nbody) if m.body_weldid[b]]
+        static = [(b, body_entity(names[b])) for b in range(1, m.nbody) if not m.body_weldid[b]]
+        joints = []
+        for robot in sim.robots:
+            prefix = c.robot_prefixes.get(robot, "")
+            ids = [m.joint(j).id for j in c.joint_names[robot]]
+            revolute = np.array([m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE for j in ids])
+            labels = [
+                f"{n.removeprefix(prefix)} ({'deg' if r else 'm'})"
+                for n, r in zip(c.joint_names[robot], revolute, strict=True)
+            ]
+            adr = np.array([m.jnt_qposadr[j] for j in ids], dtype=np.intp)
+            joints.append((joint_entity(robot), adr, revolute, labels))
+        tools = [(r, m.site(c.tool_sites[r]).id, tool_path_entity(r)) for r in sim.robots]
+        return cls(moving, static, joints, tools, [r for r in sim.robots if r in c.gripper_bodies])
+
+
+# ---------------------------------------------------------------------- static data
+def _geom_archetype(model: mujoco.MjModel, g: int) -> rr.AsComponents | None:
+    """The geom's geometry in its own frame, or None for what is not drawn."""
+    kind, size, rgba = model.geom_type[g], model.geom_size[g], _rgba(model, g)
+    if kind == _GEOM.mjGEOM_MESH:
+        mid = model.geom_dataid[g]
+        v0, nv = model.mesh_vertadr[mid], model.mesh_vertnum[mid]
+        f0, nf = model.mesh_faceadr[mid], model.mesh_facenum[mid]
+        corners = model.mesh_vert[v0 : v0 + nv][model.mesh_face[f0 : f0 + nf]]  # (nf, 3, 3)
+        # one vertex per face corner with its face's normal: flat shading, sharp edges
+        # (the compiled model's mesh_normal is not usable for this: checked on 3.17)
+        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+        pos, normals = corners.reshape(-1, 3), np.repeat(normal, 3, axis=0)
+        return rr.Mesh3D(
+            vertex_positions=pos.astype(np.float32),
+            triangle_indices=np.arange(len(pos), dtype=np.uint32).reshape(-1, 3),
+            vertex_normals=normals.astype(np.float32),
+            albedo_factor=rgba,
+        )
+    if kind == _GEOM.mjGEOM_PLANE:  # infinite planes (size 0) drawn over the model's extent
+        hx, hy = (s if s > 0 else 2.0 * model.stat.extent for s in size[:2])
+        quad = np.array([[-hx, -hy, 0], [hx, -hy, 0], [hx, hy, 0], [-hx, hy, 0]], np.float32)
+        return rr.Mesh3D(
+            vertex_positions=quad,
+            triangle_indices=np.array([[0, 1, 2], [0, 2, 3]], np.uint32),
+            vertex_normals=np.tile(np.float32([0, 0, 1]), (4, 1)),
+            albedo_factor=rgba,
+        )
+    r, h, fill = size[0], size[1], rr.components.FillMode.Solid
+    if kind == _GEOM.mjGEOM_BOX:
+        return rr.Boxes3D(half_sizes=[size], colors=[rgba], fill_mode=fill)
+    if kind in (_GEOM.mjGEOM_SPHERE, _GEOM.mjGEOM_ELLIPSOID):
+        half = size if kind == _GEOM.mjGEOM_ELLIPSOID else [r, r, r]
+        return rr.Ellipsoids3D(half_sizes=[half], colors=[rgba], fill_mode=fill)
+    if kind == _GEOM.mjGEOM_CAPSULE:  # rerun's capsule starts at the origin along +z
+        return rr.Capsules3D(lengths=[2 * h], radii=[r], translations=[[0, 0, -h]], colors=[rgba])
+    if kind == _GEOM.mjGEOM_CYLINDER:
+        return rr.Cylinders3D(lengths=[2 * h], radii=[r], colors=[rgba], fill_mode=fill)
+    return None  # height fields, SDFs: not drawn
+
+
+def _log_static(rec: rr.RecordingStream, sim: Simulator, layout: _Layout, d: mujoco.MjData) -> None:
+    """Coordinates, static body poses, geometry, cameras and series styles (once)."""
+    m = sim.model
+    rec.log(WORLD, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    names = [m.body(b).name or f"body{b}" for b in range(m.nbody)]
+    for b, ent in layout.static:  # poses of bodies welded to the world never change
+        q = wxyz_to_xyzw(d.xquat[b])
+        rec.log(ent, rr.Transform3D(translation=d.xpos[b], quaternion=q), static=True)
+    for g in range(m.ngeom):
+        if m.geom_group[g] == COLLISION_GROUP or m.geom_rgba[g][3] == 0:
+            continue
+        arch = _geom_archetype(m, g)
+        if arch is None:
+            continue
+        ent = f"{body_entity(names[m.geom_bodyid[g]])}/{_part(m.geom(g).name or f'geom{g}')}"
+        pose = rr.Transform3D(translation=m.geom_pos[g], quaternion=wxyz_to_xyzw(m.geom_quat[g]))
+        rec.log(ent, pose, arch, static=True)
+    for c in range(m.ncam):
+        ent = f"{body_entity(names[m.cam_bodyid[c]])}/{_part(m.camera(c).name or f'camera{c}')}"
+        pose = rr.Transform3D(translation=m.cam_pos[c], quaternion=wxyz_to_xyzw(m.cam_quat[c]))
+        pinhole = rr.Pinhole(
+            fov_y=float(np.radians(m.cam_fovy[c])),
+            aspect_ratio=4 / 3,
+            camera_xyz=rr.ViewCoordinates.RUB,  # MuJoCo/OpenGL: x right, y up, looks along -z
+            image_plane_distance=0.1,
+        )
+        rec.log(ent, pose, pinhole, static=True)
+    for i, (_, _, ent) in enumerate(layout.tools):
+        colour = _PALETTE[i % len(_PALETTE)]
+        rec.log(ent, rr.LineStrips3D.from_fields(colors=[colour], radii=[0.002]), static=True)
+    for ent, _, _, labels in layout.joints:
+        rec.log(ent, rr.SeriesLines(names=labels), static=True)
+    for robot in layout.grippers:
+        rec.log(gripper_entity(robot), rr.SeriesLines(names=f"{robot} closed"), static=True)
+
+
+# ---------------------------------------------------------------------- frames
+def _segments(a: Array, b: Array) -> pa.Array:
+    """Line strips of two points ``a[i] -> b[i]`` as an arrow array (rerun's numpy path
+    builds the offsets in a Python loop)."""
+    n = len(a)
+    pts = np.stack([a, b], axis=1).astype(np.float32).reshape(-1)
+    inner = pa.FixedSizeListArray.from_arrays(pa.array(pts), type=_STRIP_TYPE.value_type)
+    offsets = pa.array(np.arange(0, 2 * n + 1, 2, dtype=np.int32))
+    return pa.ListArray.from_arrays(offsets, inner, type=_STRIP_TYPE)
+
+
+class _Frames:
+    """Buffers up to ``chunk`` frames (rows and their kinematics), then sends them as columns."""
+
+    def __init__(self, rec: rr.RecordingStream, sim: Simulator, layout: _Layout, chunk: int):
+        m = self.m = sim.model
+        self.rec, self.layout, self.d = rec, layout, mujoco.MjData(m)  # scratch, not sim.data
+        self.rows = np.empty((chunk, 2 + m.nq))
+        self.xpos, self.xquat = np.empty((chunk, m.nbody, 3)), np.empty((chunk, m.nbody, 4))
+        self.sites = np.empty((chunk, m.nsite, 3))
+        self.n = self.first = 0  # frames buffered; frame index of the first one
+        self.tool_end: dict[str, Array] = {}  # last tool point sent, per robot
+
+    def add(self, rows: Array) -> None:
+        """Append timeline rows ``[sim_time, wall_time, *qpos]``, sending when full."""
+        m, d, kin = self.m, self.d, mujoco.mj_kinematics
+        qpos, xpos, xquat, sites = d.qpos, d.xpos, d.xquat, d.site_xpos
+        XP, XQ, SP = self.xpos, self.xquat, self.sites
+        while len(rows):
+            k0 = self.n
+            take = min(len(self.rows) - k0, len(rows))
+            piece, rows = rows[:take], rows[take:]
+            for k, q in enumerate(piece[:, 2:], start=k0):
+                qpos[:] = q
+                kin(m, d)
+                XP[k] = xpos
+                XQ[k] = xquat
+                SP[k] = sites
+            self.rows[k0 : k0 + take] = piece
+            self.n += take
+            if self.n == len(self.rows):
+                self.flush()
+
+    def flush(self) -> None:
+        """Send the buffered frames: body poses, joint values, tool path segments."""
+        n = self.n
+        if n == 0:
+            return
+        rec, rows = self.rec, self.rows[:n]
+        idx = _index(np.arange(self.first, self.first + n), rows[:, 0], rows[:, 1])
+        bodies = [b for b, _ in self.layout.moving]
+        # float32 (what rerun stores), body-major so each body's rows are contiguous
+        pos = np.ascontiguousarray(self.xpos[:n, bodies].transpose(1, 0, 2), dtype=np.float32)
+        quat = wxyz_to_xyzw(self.xquat[:n, bodies].reshape(-1, 4)).reshape(n, -1, 4)
+        quat = np.ascontiguousarray(quat.transpose(1, 0, 2), dtype=np.float32)
+        for i, (_, ent) in enumerate(self.layout.moving):
+            cols = rr.Transform3D.columns(translation=pos[i], quaternion=quat[i])
+            rec.send_columns(ent, indexes=idx, columns=cols)
+        for ent, adr, revolute, _ in self.layout.joints:
+            q = rows[:, 2 + adr]
+            q = np.where(revolute, np.degrees(q), q).reshape(-1)
+            cols = rr.Scalars.columns(scalars=q).partition(np.full(n, len(adr)))
+            rec.send_columns(ent, idx, cols)
+        for robot, site, ent in self.layout.tools:
+            P = self.sites[:n, site]
+            prev = np.concatenate([self.tool_end.get(robot, P[:1]), P[:-1]])
+            self.tool_end[robot] = P[-1:].copy()
+            rec.send_columns(ent, idx, rr.LineStrips3D.columns(strips=_segments(prev, P)))
+        self.first += n
+        self.n = 0
+        rec.flush()  # let the sinks catch up: unwritten batches would pile up in memory
+
+
+# ---------------------------------------------------------------------- events
+def _log_events(
+    rec: rr.RecordingStream,
+    sim: Simulator,
+    layout: _Layout,
+    frame: NDArray[np.int64],
+    wall: Array,
+    first: tuple[int, float, float],
+    last: tuple[int, float, float],
+) -> None:
+    """Events as text logs and the gripper state series. ``frame``/``wall``: each event's
+    frame and wall clock (s); ``first``/``last``: (frame, sim_time, wall_time) of the ends."""
+    events = sim.timeline.events
+    if events:
+        idx = _index(frame, [e.t for e in events], wall)
+        text = [f"[{e.robot or 'cell'}] {e.kind}: {e.detail}" for e in events]
+        level = [_LEVELS.get(e.kind, "INFO") for e in events]
+        rec.send_columns(EVENTS, idx, rr.TextLog.columns(text=text, level=level))
+    for robot in layout.grippers:  # a step: rows (before, after) at each change
+        rows, state = [(first[0], first[1], first[2], 0.0)], 0.0
+        for i, e in enumerate(events):
+            if e.robot == robot and e.kind in ("grasp", "release"):
+                new = float(e.kind == "grasp")
+                rows += [(frame[i], e.t, wall[i], state), (frame[i], e.t, wall[i], new)]
+                state = new
+        f, t, w, v = zip(*rows, (last[0], last[1], last[2], state), strict=True)
+        rec.send_columns(gripper_entity(robot), _index(f, t, w), rr.Scalars.columns(scalars=v))
+
+
+# ---------------------------------------------------------------------- public
+def default_blueprint(robots: Sequence[str], *, grippers: bool = True) -> rrb.Blueprint:
+    """The default layout: the 3D cell (tool paths drawn up to the cursor) beside one joint
+    plot per robot, the gripper states (with ``grippers``) and the event log; the time
+    panel on ``sim_time``."""
+    trail = rrb.VisibleTimeRanges(
+        timeline="sim_time",
+        start=rrb.TimeRangeBoundary.infinite(),
+        end=rrb.TimeRangeBoundary.cursor_relative(),
+    )
+    view3d = rrb.Spatial3DView(
+        origin=WORLD, name="Workcell", overrides={tool_path_entity(r): trail for r in robots}
+    )
+    plots = [
+        rrb.TimeSeriesView(origin=f"{JOINTS}/{_part(r)}", name=f"{r} joints (deg)") for r in robots
+    ]
+    side = rrb.Vertical(
+        *plots,
+        *([rrb.TimeSeriesView(origin=GRIPPERS, name="Gripper closed (1) / open (0)")] * grippers),
+        rrb.TextLogView(origin=EVENTS, name="Events"),
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(view3d, side, column_shares=[3, 2]),
+        rrb.TimePanel(timeline="sim_time"),
+    )
+
+
+def log_timeline(
+    rec: rr.RecordingStream,
+    sim: Simulator,
+    *,
+    chunk_frames: int = DEFAULT_CHUNK_FRAMES,
+    progress: bool | None = None,
+) -> RecordStats:
+    """Log ``sim``'s whole timeline into ``rec`` (see the module doc for the layout).
+
+    ``chunk_frames``: frames per ``send_columns`` batch (memory ~ 1.4 kB per frame for a
+    two-robot cell); ``progress``: a tqdm bar on stderr (None: only on a terminal and for
+    more than 50,000 frames). Returns what was logged (``path``/``bytes`` None).
+    """
+    if not (isinstance(chunk_frames, (int, np.integer)) and chunk_frames >= 1):
+        raise RecordError(f"chunk_frames must be an integer >= 1, got {chunk_frames!r}")
+    c0 = time.perf_counter()
+    tl = sim.timeline
+    layout = _Layout.of(sim)
+    n = len(tl)
+    if n == 0:
+        raise RecordError("the simulator's timeline has no frames: nothing to record")
+    t0, w0, q0 = tl.frame(0)
+    d0 = mujoco.MjData(sim.model)
+    d0.qpos[:] = q0
+    mujoco.mj_kinematics(sim.model, d0)
+    _log_static(rec, sim, layout, d0)
+    events = tl.events
+    te = np.array([e.t for e in events])
+    ef = np.array([getattr(e, "frame", -1) for e in events], dtype=np.int64)
+    known = ef >= 0
+    ev_frame = np.zeros(len(events), dtype=np.int64)
+    ev_wall = np.zeros(len(events))
+    frames = _Frames(rec, sim, layout, int(chunk_frames))
+    show = progress if progress is not None else (sys.stderr.isatty() and n > 50_000)
+    last = first = (0, t0, w0)
+    with tqdm(total=n, unit="frame", desc="record", leave=False, disable=not show) as bar:
+        for start, rows in tl.iter_blocks():
+            frames.add(rows)
+            if len(te):  # each event's own frame, else the last one with sim_time <= its t
+                k = np.searchsorted(rows[:, 0], te, side="right") - 1
+                k = np.where(known, ef - start, k)
+                hit = (k >= 0) & (k < len(rows))
+                ev_frame[hit] = start + k[hit]
+                ev_wall[hit] = rows[k[hit], 1]
+            last = (start + len(rows) - 1, float(rows[-1, 0]), float(rows[-1, 1]))
+            bar.update(len(rows))
+        frames.flush()
+    _log_events(rec, sim, layout, ev_frame, ev_wall, first, last)
+    return RecordStats(n, len(events), len(layout.moving), time.perf_counter() - c0)
+
+
+def _spawn_viewer(port: int) -> str:
+    """Start a rerun viewer listening on ``port``; return its gRPC URL."""
+    rr.spawn(port=port, connect=False)
+    return f"rerun+http://127.0.0.1:{port}/proxy"
+
+
+def record(
+    sim: Simulator,
+    path: str | os.PathLike[str] | None = None,
+    *,
+    spawn: bool = False,
+    connect: str | None = None,
+    port: int = DEFAULT_PORT,
+    chunk_frames: int = DEFAULT_CHUNK_FRAMES,
+    progress: bool | None = None,
+    application_id: str = "workcell",
+    recording_id: str | None = None,
+) -> RecordStats:
+    """Record a finished simulator's whole timeline with the default blueprint.
+
+    Destinations (any combination, at least one; all on the same code path): ``path``, an
+    ``.rrd`` file written atomically (a temp file in the same folder, renamed when
+    complete); ``spawn``: start a viewer on ``port`` and stream to it; ``connect``: stream
+    to a running viewer's gRPC URL (e.g. ``"rerun+http://127.0.0.1:9876/proxy"``).
+    Times: simulated and wall clocks as ns durations, ``frame`` as a sequence; lengths in
+    metres, joint angles in degrees. ``chunk_frames`` and ``progress``: see
+    :func:`log_timeline`. ``recording_id``: default a fresh UUID. Returns a
+    :class:`RecordStats` (``path`` and ``bytes`` set when a file was written).
+    """
+    if path is None and not spawn and connect is None:
+        raise RecordError("record: nowhere to record to; give a path, spawn=True or connect=URL")
+    if connect is not None and not (isinstance(connect, str) and "://" in connect):
+        raise RecordError(
+            f"connect must be a viewer URL such as 'rerun+http://127.0.0.1:9876/proxy', "
+            f"got {connect!r}"
+        )
+    if not (isinstance(port, int) and 0 < port < 65536):
+        raise RecordError(f"port must be an integer in 1..65535, got {port!r}")
+    target = tmp = None
+    if path is not None:
+        target = Path(path)
+        if target.suffix != ".rrd":
+            raise RecordError(f"a recording file must end in .rrd, got '{target}'")
+        if not target.parent.is_dir():
+            raise RecordError(f"cannot write '{target}': folder '{target.parent}' does not exist")
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+        os.close(fd)
+    rec = rr.RecordingStream(application_id, recording_id=recording_id)
+    rec.set_log_time_enabled(False)
+    try:
+        try:
+            bp = default_blueprint(sim.robots, grippers=bool(sim.compiled.gripper_bodies))
+            sinks: list[rr.FileSink | rr.GrpcSink] = [rr.FileSink(tmp)] if tmp is not None else []
+            sinks += [rr.GrpcSink(_spawn_viewer(port))] if spawn else []
+            sinks += [rr.GrpcSink(connect)] if connect is not None else []
+            rec.set_sinks(*sinks, default_blueprint=bp)
+            stats = log_timeline(rec, sim, chunk_frames=chunk_frames, progress=progress)
+            rec.flush()
+        except RuntimeError as exc:
+            if not (spawn or connect):
+                raise
+            url = connect or f"port {port}"
+            raise RecordError(f"streaming to the rerun viewer at {url} failed: {exc}") from exc
+        finally:
+            rec.disconnect()
+        if tmp is not None and target is not None:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)
+            os.replace(tmp, target)
+            tmp = None
+    finally:
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
+    size = target.stat().st_size if target is not None else None
+    return RecordStats(stats.frames, stats.events, stats.moving_bodies, stats.seconds, target, size)
