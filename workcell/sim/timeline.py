@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = ["DEFAULT_CHUNK", "DEFAULT_MEMORY_LIMIT", "Event", "Timeline", "TimelineMark"]
 
 DEFAULT_CHUNK = 4096
-DEFAULT_MEMORY_LIMIT = 64 * 2**20  # bytes of frames kept in memory before spilling
+DEFAULT_MEMORY_LIMIT = 32 * 2**20  # bytes of frames kept in memory before spilling
 Array = NDArray[np.float64]
 
 
