@@ -53,11 +53,24 @@ import numpy as np
 import pyarrow as pa
 import rerun as rr
 import rerun.blueprint as rrb
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from tqdm import tqdm
 
 from workcell.errors import RecordError
-from workcell.robots.mjcf import COLLISION_GROUP
+from workcell.record.rr_scene import (
+    EVENTS,
+    GRIPPERS,
+    JOINTS,
+    WORLD,
+    Layout,
+    body_entity,
+    entity_part,
+    gripper_entity,
+    index_columns,
+    joint_entity,
+    log_static,
+    tool_path_entity,
+)
 from workcell.spatial import wxyz_to_xyzw
 
 if TYPE_CHECKING:
@@ -76,18 +89,10 @@ __all__ = [
     "tool_path_entity",
 ]
 
-WORLD = "/world"
-BODIES = "/world/bodies"
-TOOL_PATHS = "/world/tool_paths"
-JOINTS = "/joints"
-GRIPPERS = "/gripper"
-EVENTS = "/events"
 DEFAULT_CHUNK_FRAMES = 8192
 DEFAULT_PORT = 9876
 _LEVELS = {"error": "ERROR", "collision": "WARN", "grasp": "INFO", "release": "INFO"}
 _LEVELS |= {"move": "DEBUG", "wait": "DEBUG", "speed": "DEBUG"}
-_PALETTE = [(230, 80, 40), (40, 120, 230), (40, 170, 80), (200, 60, 200), (220, 180, 30)]
-_GEOM = mujoco.mjtGeom
 _STRIP_TYPE = rr.components.LineStrip3DBatch._ARROW_DATATYPE
 
 Array = NDArray[np.float64]
@@ -107,161 +112,10 @@ class RecordStats:
     bytes: int | None = None
 
 
-def _part(name: str) -> str:
-    return rr.escape_entity_path_part(name)
-
-
-def body_entity(body: str) -> str:
-    """Entity path of a MuJoCo body (its world pose)."""
-    return f"{BODIES}/{_part(body)}"
-
-
-def joint_entity(robot: str) -> str:
-    """Entity path of a robot's joint value series (one series per joint)."""
-    return f"{JOINTS}/{_part(robot)}"
-
-
-def gripper_entity(robot: str) -> str:
-    """Entity path of a robot's gripper state series (1 closed on a part, 0 open)."""
-    return f"{GRIPPERS}/{_part(robot)}"
-
-
-def tool_path_entity(robot: str) -> str:
-    """Entity path of a robot's tool path segments."""
-    return f"{TOOL_PATHS}/{_part(robot)}"
-
-
-def _ns(seconds: Array) -> NDArray[np.timedelta64]:
-    """Seconds -> integer nanoseconds as ``timedelta64[ns]`` (rounded, never truncated)."""
-    return np.rint(np.asarray(seconds) * 1e9).astype(np.int64).astype("timedelta64[ns]")
-
-
-def _index(frames: ArrayLike, sim_t: ArrayLike, wall_t: ArrayLike) -> list[rr.TimeColumn]:
-    """The three timelines of rows: frame indices, simulated and wall clocks (s)."""
-    return [
-        rr.TimeColumn("frame", sequence=np.asarray(frames, dtype=np.int64)),
-        rr.TimeColumn("sim_time", duration=_ns(sim_t)),
-        rr.TimeColumn("wall_time", duration=_ns(wall_t)),
-    ]
-
-
-def _rgba(model: mujoco.MjModel, g: int) -> NDArray[np.uint8]:
-    rgba = model.geom_rgba[g]
-    mat = model.geom_matid[g]
-    if mat >= 0 and np.allclose(rgba, (0.5, 0.5, 0.5, 1.0)):  # MuJoCo: material unless set
-        rgba = model.mat_rgba[mat]
-    return np.round(np.clip(rgba, 0, 1) * 255).astype(np.uint8)
-
-
 # ---------------------------------------------------------------------- layout
-@dataclass
-class _Layout:
-    """Names and indices of what is logged, from the compiled model."""
-
-    moving: list[tuple[int, str]]  # (body id, entity) with a pose per frame
-    static: list[tuple[int, str]]  # bodies welded to the world (not the world body)
-    joints: list[tuple[str, NDArray[np.intp], NDArray[np.bool_], list[str]]]
-    # (entity, qpos addresses, revolute, series names) per robot
-    tools: list[tuple[str, int, str]]  # (robot, site id, entity)
-    grippers: list[str]  # robots with a gripper
-
-    @classmethod
-    def of(cls, sim: Simulator) -> _Layout:
-        m, c = sim.model, sim.compiled
-        names = [m.body(b).name or f"body{b}" for b in range(m.nbody)]
-        moving = [(b, body_entity(names[b])) for b in range(1, m.nbody) if m.body_weldid[b]]
-        static = [(b, body_entity(names[b])) for b in range(1, m.nbody) if not m.body_weldid[b]]
-        joints = []
-        for robot in sim.robots:
-            prefix = c.robot_prefixes.get(robot, "")
-            ids = [m.joint(j).id for j in c.joint_names[robot]]
-            revolute = np.array([m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE for j in ids])
-            labels = [
-                f"{n.removeprefix(prefix)} ({'deg' if r else 'm'})"
-                for n, r in zip(c.joint_names[robot], revolute, strict=True)
-            ]
-            adr = np.array([m.jnt_qposadr[j] for j in ids], dtype=np.intp)
-            joints.append((joint_entity(robot), adr, revolute, labels))
-        tools = [(r, m.site(c.tool_sites[r]).id, tool_path_entity(r)) for r in sim.robots]
-        return cls(moving, static, joints, tools, [r for r in sim.robots if r in c.gripper_bodies])
 
 
 # ---------------------------------------------------------------------- static data
-def _geom_archetype(model: mujoco.MjModel, g: int) -> rr.AsComponents | None:
-    """The geom's geometry in its own frame, or None for what is not drawn."""
-    kind, size, rgba = model.geom_type[g], model.geom_size[g], _rgba(model, g)
-    if kind == _GEOM.mjGEOM_MESH:
-        mid = model.geom_dataid[g]
-        v0, nv = model.mesh_vertadr[mid], model.mesh_vertnum[mid]
-        f0, nf = model.mesh_faceadr[mid], model.mesh_facenum[mid]
-        corners = model.mesh_vert[v0 : v0 + nv][model.mesh_face[f0 : f0 + nf]]  # (nf, 3, 3)
-        # one vertex per face corner with its face's normal: flat shading, sharp edges
-        # (the compiled model's mesh_normal is not usable for this: checked on 3.17)
-        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
-        pos, normals = corners.reshape(-1, 3), np.repeat(normal, 3, axis=0)
-        return rr.Mesh3D(
-            vertex_positions=pos.astype(np.float32),
-            triangle_indices=np.arange(len(pos), dtype=np.uint32).reshape(-1, 3),
-            vertex_normals=normals.astype(np.float32),
-            albedo_factor=rgba,
-        )
-    if kind == _GEOM.mjGEOM_PLANE:  # infinite planes (size 0) drawn over the model's extent
-        hx, hy = (s if s > 0 else 2.0 * model.stat.extent for s in size[:2])
-        quad = np.array([[-hx, -hy, 0], [hx, -hy, 0], [hx, hy, 0], [-hx, hy, 0]], np.float32)
-        return rr.Mesh3D(
-            vertex_positions=quad,
-            triangle_indices=np.array([[0, 1, 2], [0, 2, 3]], np.uint32),
-            vertex_normals=np.tile(np.float32([0, 0, 1]), (4, 1)),
-            albedo_factor=rgba,
-        )
-    r, h, fill = size[0], size[1], rr.components.FillMode.Solid
-    if kind == _GEOM.mjGEOM_BOX:
-        return rr.Boxes3D(half_sizes=[size], colors=[rgba], fill_mode=fill)
-    if kind in (_GEOM.mjGEOM_SPHERE, _GEOM.mjGEOM_ELLIPSOID):
-        half = size if kind == _GEOM.mjGEOM_ELLIPSOID else [r, r, r]
-        return rr.Ellipsoids3D(half_sizes=[half], colors=[rgba], fill_mode=fill)
-    if kind == _GEOM.mjGEOM_CAPSULE:  # rerun's capsule starts at the origin along +z
-        return rr.Capsules3D(lengths=[2 * h], radii=[r], translations=[[0, 0, -h]], colors=[rgba])
-    if kind == _GEOM.mjGEOM_CYLINDER:
-        return rr.Cylinders3D(lengths=[2 * h], radii=[r], colors=[rgba], fill_mode=fill)
-    return None  # height fields, SDFs: not drawn
-
-
-def _log_static(rec: rr.RecordingStream, sim: Simulator, layout: _Layout, d: mujoco.MjData) -> None:
-    """Coordinates, static body poses, geometry, cameras and series styles (once)."""
-    m = sim.model
-    rec.log(WORLD, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    names = [m.body(b).name or f"body{b}" for b in range(m.nbody)]
-    for b, ent in layout.static:  # poses of bodies welded to the world never change
-        q = wxyz_to_xyzw(d.xquat[b])
-        rec.log(ent, rr.Transform3D(translation=d.xpos[b], quaternion=q), static=True)
-    for g in range(m.ngeom):
-        if m.geom_group[g] == COLLISION_GROUP or m.geom_rgba[g][3] == 0:
-            continue
-        arch = _geom_archetype(m, g)
-        if arch is None:
-            continue
-        ent = f"{body_entity(names[m.geom_bodyid[g]])}/{_part(m.geom(g).name or f'geom{g}')}"
-        pose = rr.Transform3D(translation=m.geom_pos[g], quaternion=wxyz_to_xyzw(m.geom_quat[g]))
-        rec.log(ent, pose, arch, static=True)
-    for c in range(m.ncam):
-        ent = f"{body_entity(names[m.cam_bodyid[c]])}/{_part(m.camera(c).name or f'camera{c}')}"
-        pose = rr.Transform3D(translation=m.cam_pos[c], quaternion=wxyz_to_xyzw(m.cam_quat[c]))
-        pinhole = rr.Pinhole(
-            fov_y=float(np.radians(m.cam_fovy[c])),
-            aspect_ratio=4 / 3,
-            camera_xyz=rr.ViewCoordinates.RUB,  # MuJoCo/OpenGL: x right, y up, looks along -z
-            image_plane_distance=0.1,
-        )
-        rec.log(ent, pose, pinhole, static=True)
-    for i, (_, _, ent) in enumerate(layout.tools):
-        colour = _PALETTE[i % len(_PALETTE)]
-        rec.log(ent, rr.LineStrips3D.from_fields(colors=[colour], radii=[0.002]), static=True)
-    for ent, _, _, labels in layout.joints:
-        rec.log(ent, rr.SeriesLines(names=labels), static=True)
-    for robot in layout.grippers:
-        rec.log(gripper_entity(robot), rr.SeriesLines(names=f"{robot} closed"), static=True)
 
 
 # ---------------------------------------------------------------------- frames
@@ -278,7 +132,7 @@ def _segments(a: Array, b: Array) -> pa.Array:
 class _Frames:
     """Buffers up to ``chunk`` frames (rows and their kinematics), then sends them as columns."""
 
-    def __init__(self, rec: rr.RecordingStream, sim: Simulator, layout: _Layout, chunk: int):
+    def __init__(self, rec: rr.RecordingStream, sim: Simulator, layout: Layout, chunk: int):
         m = self.m = sim.model
         self.rec, self.layout, self.d = rec, layout, mujoco.MjData(m)  # scratch, not sim.data
         self.rows = np.empty((chunk, 2 + m.nq))
@@ -313,7 +167,7 @@ class _Frames:
         if n == 0:
             return
         rec, rows = self.rec, self.rows[:n]
-        idx = _index(np.arange(self.first, self.first + n), rows[:, 0], rows[:, 1])
+        idx = index_columns(np.arange(self.first, self.first + n), rows[:, 0], rows[:, 1])
         bodies = [b for b, _ in self.layout.moving]
         # float32 (what rerun stores), body-major so each body's rows are contiguous
         pos = np.ascontiguousarray(self.xpos[:n, bodies].transpose(1, 0, 2), dtype=np.float32)
@@ -341,7 +195,7 @@ class _Frames:
 def _log_events(
     rec: rr.RecordingStream,
     sim: Simulator,
-    layout: _Layout,
+    layout: Layout,
     frame: NDArray[np.int64],
     wall: Array,
     first: tuple[int, float, float],
@@ -351,7 +205,7 @@ def _log_events(
     frame and wall clock (s); ``first``/``last``: (frame, sim_time, wall_time) of the ends."""
     events = sim.timeline.events
     if events:
-        idx = _index(frame, [e.t for e in events], wall)
+        idx = index_columns(frame, [e.t for e in events], wall)
         text = [f"[{e.robot or 'cell'}] {e.kind}: {e.detail}" for e in events]
         level = [_LEVELS.get(e.kind, "INFO") for e in events]
         rec.send_columns(EVENTS, idx, rr.TextLog.columns(text=text, level=level))
@@ -363,7 +217,9 @@ def _log_events(
                 rows += [(frame[i], e.t, wall[i], state), (frame[i], e.t, wall[i], new)]
                 state = new
         f, t, w, v = zip(*rows, (last[0], last[1], last[2], state), strict=True)
-        rec.send_columns(gripper_entity(robot), _index(f, t, w), rr.Scalars.columns(scalars=v))
+        rec.send_columns(
+            gripper_entity(robot), index_columns(f, t, w), rr.Scalars.columns(scalars=v)
+        )
 
 
 # ---------------------------------------------------------------------- public
@@ -380,7 +236,8 @@ def default_blueprint(robots: Sequence[str], *, grippers: bool = True) -> rrb.Bl
         origin=WORLD, name="Workcell", overrides={tool_path_entity(r): trail for r in robots}
     )
     plots = [
-        rrb.TimeSeriesView(origin=f"{JOINTS}/{_part(r)}", name=f"{r} joints (deg)") for r in robots
+        rrb.TimeSeriesView(origin=f"{JOINTS}/{entity_part(r)}", name=f"{r} joints (deg)")
+        for r in robots
     ]
     side = rrb.Vertical(
         *plots,
@@ -410,7 +267,7 @@ def log_timeline(
         raise RecordError(f"chunk_frames must be an integer >= 1, got {chunk_frames!r}")
     c0 = time.perf_counter()
     tl = sim.timeline
-    layout = _Layout.of(sim)
+    layout = Layout.of(sim)
     n = len(tl)
     if n == 0:
         raise RecordError("the simulator's timeline has no frames: nothing to record")
@@ -418,7 +275,7 @@ def log_timeline(
     d0 = mujoco.MjData(sim.model)
     d0.qpos[:] = q0
     mujoco.mj_kinematics(sim.model, d0)
-    _log_static(rec, sim, layout, d0)
+    log_static(rec, sim, layout, d0)
     events = tl.events
     te = np.array([e.t for e in events])
     ef = np.array([getattr(e, "frame", -1) for e in events], dtype=np.int64)
