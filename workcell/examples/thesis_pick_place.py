@@ -4,7 +4,7 @@ One Puma 260 with a parallel-jaw gripper on a table, a movable aluminium cube (4
 and two fixed stages. The thesis's program: move_end_effector to a grasp pose over the
 cube; close_gripper; move_end_effector above stage 1; open_gripper; move_joints_absolute
 home. Here each grasp and release is approached and left along a vertical straight line
-(``move_straight_line``, 80 mm), so the fingers never sweep through the table or the
+(``move_straight_line``, 100 mm), so the fingers never sweep through the table or the
 cube; the cube is set down with its bottom face on stage 1's top and stays there.
 """
 

@@ -1,12 +1,8 @@
-"""Offscreen pictures of a workcell: PNGs of any frame, contact sheets of key frames, MP4 videos.
+"""Offscreen pictures of a workcell: cameras, the renderer, PNGs of any frame.
 
-Rendering uses MuJoCo's OpenGL renderer headless. The GL backend is ``MUJOCO_GL`` when
-set (``egl``, ``osmesa`` or ``glfw``); otherwise EGL is tried, then OSMesa; when none
-works a :class:`~workcell.errors.WorkcellError` (``RenderError``) says what each
-attempt gave. The backend is picked when the first GL context is created, not when
-``mujoco`` is imported: this module makes its contexts itself (``mujoco.Renderer`` binds
-the backend at ``import mujoco``, so setting ``MUJOCO_GL`` afterwards has no effect on
-it). Once a backend works it is kept for the process.
+Rendering uses MuJoCo's OpenGL renderer headless; :mod:`workcell.record.gl` picks the
+backend (``MUJOCO_GL``, else EGL then OSMesa, a RenderError when none works) when the
+first context is made, and this module keeps it for the process (:func:`gl_backend`).
 
 Pictures show visual geometry only (collision pieces, group 3, and sites hidden), no
 shadows and no multisampling (about 15x cheaper on a CPU), a sun-like directional light
@@ -14,21 +10,20 @@ plus the head light, and a soft sky where nothing is drawn. The default camera,
 :func:`overview_camera`, frames the visual geometry of the cell over a whole run, so
 robots and parts fill the picture without being clipped. Sizes are in pixels, times in
 seconds of simulated time.
+
+Contact sheets of key frames and MP4 videos live in :mod:`workcell.record.sheets`; their
+names are importable from here too (``from workcell.record.render import contact_sheet``).
 """
 
 from __future__ import annotations
 
-import contextlib
 import copy
 import io
 import math
 import os
-import sys
-import tempfile
 from collections.abc import Iterable, Iterator, Sequence
-from fractions import Fraction
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
@@ -36,109 +31,66 @@ from numpy.typing import NDArray
 
 from workcell.errors import ModelError, RenderError
 from workcell.files import atomic_write_bytes
+from workcell.record.gl import free_context, open_context
 
 if TYPE_CHECKING:
     from workcell.cell.workcell import Workcell
+    from workcell.record.sheets import (
+        KEY_EVENT_KINDS,
+        KeyFrame,
+        contact_sheet,
+        key_frames,
+        save_mp4,
+        video_frames,
+    )
     from workcell.sim.simulator import Simulator
 
 __all__ = [
-    "KEY_EVENT_KINDS",
+    "KEY_EVENT_KINDS",  # from sheets
     "CellRenderer",
-    "KeyFrame",
-    "contact_sheet",
+    "KeyFrame",  # from sheets
+    "contact_sheet",  # from sheets
     "gl_backend",
-    "key_frames",
+    "key_frames",  # from sheets
     "overview_camera",
     "render_cell",
     "render_frame",
-    "save_mp4",
+    "save_mp4",  # from sheets
     "save_png",
-    "video_frames",
+    "video_frames",  # from sheets
 ]
 
-KEY_EVENT_KINDS = ("move", "grasp", "release", "wait", "open", "close", "line", "path")
-_BACKENDS = ("egl", "osmesa", "glfw")
+_SHEETS = ("KEY_EVENT_KINDS", "KeyFrame", "contact_sheet", "key_frames", "save_mp4", "video_frames")
 _COLLISION_GROUP = 3
 _SKY_TOP = np.array([0.45, 0.56, 0.72])  # background gradient (RGB 0-1), top to horizon
 _SKY_HORIZON = np.array([0.74, 0.78, 0.84])
 _FLOOR_RGBA = np.array([0.46, 0.49, 0.54, 1.0])  # planes: darker than the pale arm links
 _GRID_RGBA = np.array([0.56, 0.59, 0.64, 1.0], np.float32)
-_backend: str | None = None
+_backend: str | None = None  # the GL backend that worked, kept for the process
 
 Image = NDArray[np.uint8]
 
 
+def __getattr__(name: str) -> Any:
+    """The names of :mod:`workcell.record.sheets`, imported on first use (it imports this
+    module, so importing it here at the top would be circular)."""
+    if name in _SHEETS:
+        from workcell.record import sheets
+
+        return getattr(sheets, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_SHEETS})
+
+
 # ---------------------------------------------------------------------- backend
-def _forget_pyopengl(platform_before: str | None) -> None:
-    """Unload PyOpenGL (its platform is fixed at import) so another backend can load it."""
-    for name in [n for n in sys.modules if n == "OpenGL" or n.startswith("OpenGL.")]:
-        del sys.modules[name]
-    for name in ("mujoco.egl", "mujoco.egl.egl_ext", "mujoco.osmesa"):
-        sys.modules.pop(name, None)
-    if platform_before is None:
-        os.environ.pop("PYOPENGL_PLATFORM", None)
-    else:
-        os.environ["PYOPENGL_PLATFORM"] = platform_before
-
-
-def _context_class(name: str) -> Any:
-    if name == "egl":
-        from mujoco.egl import GLContext
-    elif name == "osmesa":
-        from mujoco.osmesa import GLContext
-    else:
-        from mujoco.glfw import GLContext
-    return GLContext
-
-
 def _open_gl(model: mujoco.MjModel, width: int, height: int) -> tuple[Any, mujoco.MjrContext]:
     """A current GL context and an offscreen MjrContext, choosing the backend on first use."""
     global _backend
-    if _backend is not None:
-        names = [_backend]
-    else:
-        asked = os.environ.get("MUJOCO_GL", "").strip().lower()
-        if asked in ("disable", "disabled", "off", "false", "0"):
-            raise RenderError(f"rendering is disabled by MUJOCO_GL={asked!r}; unset it or use egl")
-        if asked in ("", "enable", "enabled", "on", "true", "1"):
-            names = ["egl", "osmesa"]
-        elif asked in (*_BACKENDS, "glx"):
-            names = [asked]
-        else:
-            raise RenderError(
-                f"MUJOCO_GL={asked!r} is not a rendering backend; valid: {', '.join(_BACKENDS)}"
-            )
-    failures = []
-    for name in names:
-        loaded = "OpenGL" in sys.modules
-        platform = os.environ.get("PYOPENGL_PLATFORM")
-        gl = None
-        try:
-            gl = _context_class(name)(width, height)
-            gl.make_current()
-            mjr = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150)
-        except Exception as exc:  # ImportError, RuntimeError, mujoco.FatalError, GLError ...
-            failures.append(f"{name}: {type(exc).__name__}: {str(exc).strip().rstrip('.')}")
-            if gl is not None:
-                _free(gl)
-            if not loaded and _backend is None:
-                _forget_pyopengl(platform)
-            continue
-        _backend = name
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, mjr)
-        return gl, mjr
-    how = "MUJOCO_GL" if len(names) == 1 else "no MUJOCO_GL set; tried"
-    raise RenderError(
-        f"no OpenGL backend works for offscreen rendering ({how} {', '.join(names)}): "
-        + "; ".join(failures)
-        + ". On Linux install libegl1 and libegl-mesa0 (egl) or libosmesa6 (osmesa), leave "
-        "PYOPENGL_PLATFORM unset, and set MUJOCO_GL=egl or MUJOCO_GL=osmesa"
-    )
-
-
-def _free(gl: Any) -> None:
-    with contextlib.suppress(Exception):  # a half-made context may not free cleanly
-        gl.free()
+    gl, mjr, _backend = open_context(model, width, height, _backend)
+    return gl, mjr
 
 
 def gl_backend() -> str | None:
@@ -263,7 +215,7 @@ class CellRenderer:
             self._mjr.free()
             self._mjr = None
         if self._gl is not None:
-            _free(self._gl)
+            free_context(self._gl)
             self._gl = None
 
     def __enter__(self) -> CellRenderer:
@@ -398,6 +350,8 @@ def _frames_qpos(sim: Simulator, frames: Sequence[int]) -> Iterator[NDArray[np.f
 
 def _sample_frames(sim: Simulator, n: int = 64) -> list[int]:
     """n frames evenly over the run plus every key frame (the poses a camera must cover)."""
+    from workcell.record.sheets import key_frames
+
     total = sim.frames
     even = np.linspace(0, total - 1, min(n, total)).round().astype(int).tolist()
     return sorted({*even, *(k.frame for k in key_frames(sim)), total - 1})
@@ -472,189 +426,3 @@ def save_png(image: NDArray[np.uint8], path: str | os.PathLike) -> Path:
     p = Path(path)
     atomic_write_bytes(p, _png_bytes(a))
     return p
-
-
-# ---------------------------------------------------------------------- contact sheet
-class KeyFrame(NamedTuple):
-    """A tile of a contact sheet: timeline ``frame``, its simulated time ``t`` (s), a
-    ``title`` (robot and command: the first word of the event's detail, else its kind)
-    and the rest of the event's ``detail``."""
-
-    frame: int
-    t: float
-    title: str
-    detail: str
-
-
-def key_frames(sim: Simulator, kinds: Sequence[str] = KEY_EVENT_KINDS) -> list[KeyFrame]:
-    """Frame 0 and the end of each command (events of ``kinds``), in order.
-
-    An event maps to its ``frame`` (the last frame when it was recorded), exact in every
-    mode, or, for events without one, to the last frame whose simulated time is at most
-    the event's (1e-9 s).
-    """
-    times = sim.timeline.sim_times()
-    out = [KeyFrame(0, float(times[0]), "initial state", "")]
-    for e in sim.events:
-        if e.kind not in kinds:
-            continue
-        i = getattr(e, "frame", -1)
-        if i < 0:
-            i = max(int(np.searchsorted(times, e.t + 1e-9, side="right")) - 1, 0)
-        command, _, rest = e.detail.partition(" ")
-        if not command.isidentifier():
-            command, rest = e.kind, e.detail
-        title = f"{e.robot}: {command}" if e.robot else command
-        out.append(KeyFrame(i, float(times[i]), title, rest))
-    return out
-
-
-def _font(size: int) -> Any:
-    from PIL import ImageFont
-
-    try:
-        return ImageFont.load_default(size=size)
-    except TypeError:  # Pillow < 10.1: a fixed bitmap font
-        return ImageFont.load_default()
-
-
-def _fit(draw: Any, text: str, font: Any, width: float) -> str:
-    if draw.textlength(text, font=font) <= width:
-        return text
-    while text and draw.textlength(text + "…", font=font) > width:
-        text = text[:-1]
-    return text + "…"
-
-
-def contact_sheet(
-    sim: Simulator,
-    path: str | os.PathLike,
-    *,
-    camera: str | None = None,
-    tile_width: int = 320,
-    tile_height: int = 240,
-    columns: int | None = None,
-    kinds: Sequence[str] = KEY_EVENT_KINDS,
-) -> list[KeyFrame]:
-    """Write a PNG grid of :func:`key_frames`, each tile captioned with its time and command.
-
-    Tiles are ``tile_width`` x ``tile_height`` renders (one camera for all, see
-    :func:`render_frame`) above a two-line caption; ``columns`` defaults to
-    ceil(sqrt(n)). Returns the key frames in tile order (row by row).
-    """
-    from PIL import Image as PILImage
-    from PIL import ImageDraw
-
-    keys = key_frames(sim, kinds)
-    n = len(keys)
-    cols = columns if columns else math.ceil(math.sqrt(n))
-    if not (isinstance(cols, int) and cols >= 1):
-        raise RenderError(f"columns must be an integer >= 1, got {columns!r}")
-    rows = math.ceil(n / cols)
-    fsize = max(9, tile_height // 18)
-    cap_h, gap = 2 * fsize + 10, 4
-    sheet = PILImage.new(
-        "RGB",
-        (cols * tile_width + (cols + 1) * gap, rows * (tile_height + cap_h) + (rows + 1) * gap),
-        "white",
-    )
-    draw, font = ImageDraw.Draw(sheet), _font(fsize)
-    cam = _camera_for(sim, camera, tile_width, tile_height)
-    data = mujoco.MjData(sim.model)
-    order = sorted(range(n), key=lambda k: keys[k].frame)
-    qs = dict(zip(order, _frames_qpos(sim, [keys[k].frame for k in order]), strict=True))
-    with CellRenderer(sim.model, tile_width, tile_height) as r:
-        for k, key in enumerate(keys):
-            data.qpos[:] = qs[k]
-            mujoco.mj_forward(sim.model, data)
-            x = gap + (k % cols) * (tile_width + gap)
-            y = gap + (k // cols) * (tile_height + cap_h + gap)
-            sheet.paste(PILImage.fromarray(r.render(data, cam)), (x, y))
-            line1 = _fit(draw, f"{k}.  t = {key.t:.2f} s   {key.title}", font, tile_width - 6)
-            line2 = _fit(draw, key.detail, font, tile_width - 6)
-            draw.text((x + 3, y + tile_height + 3), line1, fill=(20, 20, 20), font=font)
-            draw.text((x + 3, y + tile_height + 5 + fsize), line2, fill=(90, 90, 90), font=font)
-    buf = np.asarray(sheet)
-    save_png(buf, path)
-    return keys
-
-
-# ---------------------------------------------------------------------- video
-@contextlib.contextmanager
-def _atomic_target(path: Path) -> Iterator[str]:
-    """A temp file beside ``path`` that replaces it (fsync, usual mode) when the block succeeds."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        yield tmp
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def video_frames(sim: Simulator, fps: float) -> NDArray[np.intp]:
-    """Timeline frame shown at each video frame: samples every 1/fps s of simulated time
-    from 0 to the end (the last sample is the final frame), ceil(T fps) + 1 of them."""
-    times = sim.timeline.sim_times()
-    T = float(times[-1] - times[0])
-    n = math.ceil(T * fps - 1e-9) + 1
-    ts = np.minimum(times[0] + np.arange(n) / fps, times[-1])
-    return np.maximum(np.searchsorted(times, ts + 1e-9, side="right") - 1, 0)
-
-
-def save_mp4(
-    sim: Simulator,
-    path: str | os.PathLike,
-    *,
-    fps: float = 30.0,
-    camera: str | None = None,
-    width: int = 640,
-    height: int = 480,
-    crf: int = 20,
-    progress: bool | None = None,
-) -> int:
-    """Write an H.264 MP4 of the run in simulated time (``fps`` samples per simulated s).
-
-    ``width`` and ``height`` must be even (yuv420p). ``progress``: a tqdm bar on stderr
-    (default: when stderr is a terminal). Written atomically. Returns the number of
-    video frames, ``ceil(T * fps) + 1`` for a run of T simulated seconds.
-    """
-    import av
-    from tqdm import tqdm
-
-    if not (fps > 0 and math.isfinite(fps)):
-        raise RenderError(f"fps must be a finite number > 0, got {fps!r}")
-    if width % 2 or height % 2:
-        raise RenderError(f"MP4 width and height must be even, got {width} x {height}")
-    idx = video_frames(sim, fps)
-    cam = _camera_for(sim, camera, width, height)
-    show = sys.stderr.isatty() if progress is None else progress
-    data = mujoco.MjData(sim.model)
-    p = Path(path)
-    with (
-        CellRenderer(sim.model, width, height) as r,
-        _atomic_target(p) as tmp,
-        av.open(tmp, mode="w", format="mp4") as out,
-    ):
-        stream = out.add_stream("libx264", rate=Fraction(fps).limit_denominator(1000))
-        stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
-        stream.options = {"crf": str(crf), "preset": "veryfast"}
-        qs = _frames_qpos(sim, sorted(set(idx.tolist())))  # idx never decreases: one pass
-        img, last = None, -1
-        for i in tqdm(idx.tolist(), disable=not show, unit="frame", desc="mp4"):
-            if i != last:
-                data.qpos[:] = next(qs)
-                mujoco.mj_forward(sim.model, data)
-                img, last = r.render(data, cam), i
-            for packet in stream.encode(av.VideoFrame.from_ndarray(img, format="rgb24")):
-                out.mux(packet)
-        for packet in stream.encode():
-            out.mux(packet)
-    return len(idx)
