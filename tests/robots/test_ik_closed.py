@@ -9,6 +9,8 @@
 - Reach: the workspace of the wrist centre computed by hand from the DH table: between
   the spheres about the shoulder of radii sqrt((L -+ a2)^2 + d3^2), L = sqrt(a3^2 + d4^2),
   and outside the cylinder of radius |d3| about the joint 1 axis.
+- The single-pose path (Python floats) against the batched one (numpy), its joint
+  wrapping against ``Robot.wrap_batch`` to the bit, its FK check against ``Robot.fk``.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from hypothesis import strategies as st
 
 from workcell import spatial
 from workcell.errors import GeometryError, KinematicsError
-from workcell.robots import Robot, puma260, puma560
+from workcell.robots import Robot, ik_closed, puma260, puma560
 from workcell.robots.ik_closed import (
     CONFIGS,
     puma_config,
@@ -475,3 +477,133 @@ def test_all_solutions_outside_limits_are_reported():
     assert not any(s.within_limits or s.success for s in sols)
     assert "joint limits" in reason
     assert all(re.search(r"joints? [\d, ]*\b5\b", s.reason) for s in sols)
+
+
+# ---------------------------------------------------------------- the single-pose fast path
+# puma_ik_report works in Python floats: it wraps the joints itself (the same operations as
+# Robot.wrap_batch) and checks every answer with the Puma's FK written out in frame 0.
+# These tests hold both against the robot's own numpy paths.
+TILTED_TOOL = P260.with_(
+    name="puma260_tilted_tool",
+    tool=spatial.translation(0.03, -0.02, 0.15) @ spatial.rot_x(0.5) @ spatial.rot_z(0.2),
+)
+FAST = {**ROBOTS, "tilted_tool": TILTED_TOOL}
+
+
+def fk_errors_by_robot(robot, q, T):
+    """Position (m) and orientation (rad, 2 asin(|dR|_F / sqrt(8))) errors of Robot.fk(q)."""
+    D = robot.fk(q) - T
+    dr = 2 * math.asin(min(1.0, np.linalg.norm(D[:3, :3]) / math.sqrt(8)))
+    return np.linalg.norm(D[:3, 3]), dr
+
+
+@pytest.mark.parametrize("name", list(FAST))
+@settings(max_examples=80, deadline=None)
+@given(data=st.data())
+def test_single_pose_path_agrees_with_the_batch_path_and_robot_fk(name, data):
+    robot = FAST[name]
+    q = data.draw(joint_vectors(robot))
+    T = robot.fk(q)
+    kind = data.draw(st.sampled_from(["none", "near", "turns away"]))
+    q_current = None
+    if kind == "near":
+        q_current = data.draw(joint_vectors(robot))
+    elif kind == "turns away":  # far outside the limits: every joint needs its own k
+        turns = data.draw(st.lists(st.integers(-3, 3), min_size=6, max_size=6))
+        q_current = q + TWO_PI * np.array(turns) + 0.3
+    sols, reason = puma_ik_report(robot, T, q_current)
+    Q, valid = puma_ik_batch(robot, T, q_current)
+    present = [c for c, row in zip(CONFIGS, Q[0], strict=True) if not np.isnan(row).any()]
+    assert sorted(s.config for s in sols) == sorted(present)
+    for s in sols:
+        k = CONFIGS.index(s.config)
+        assert s.within_limits == valid[0, k]
+        # the two paths compute theta apart (math here, numpy there), to rounding, which
+        # moves q4 and q6 by ~1e-16 / |sin theta5| near a singular wrist (both exact: see
+        # the FK errors below); and a tie (an angle at +-pi, or half a turn from
+        # q_current) may go either way
+        tol = np.full(6, 1e-11)
+        tol[[3, 5]] += 1e-14 / max(abs(math.sin(s.q[4] + robot.joints[4].offset)), 1e-300)
+        assert (np.abs(wrapped(s.q - Q[0, k])) <= tol).all()
+        toward = Q[0, k] if q_current is None else wrapped(Q[0, k] - q_current)
+        tie = np.abs(np.abs(toward) - np.pi) < 1e-9
+        if s.within_limits:
+            assert (np.abs(s.q - Q[0, k])[~tie] <= tol[~tie]).all()
+        dp, dr = fk_errors_by_robot(robot, s.q, T)
+        assert abs(s.position_error - dp) < 1e-12
+        assert abs(s.orientation_error - dr) < 1e-12
+    if q_current is None:
+        keys = [(not s.within_limits, CONFIGS.index(s.config)) for s in sols]
+    else:
+        keys = [(not s.within_limits, np.abs(s.q - q_current).max()) for s in sols]
+    assert keys == sorted(keys)
+    assert (reason == "") == any(s.within_limits for s in sols)
+
+
+@pytest.mark.parametrize("name", list(FAST))
+def test_frame0_fk_check_matches_robot_fk_for_arbitrary_q(name):
+    # the errors of arbitrary joint vectors against an unrelated target (so they are
+    # large) match the errors of Robot.fk, for robots with a base, a tool translation
+    # and a tool rotation
+    robot = FAST[name]
+    P = ik_closed._params(robot)
+    assert P.frame0
+    rng = np.random.default_rng(17)
+    for _ in range(20):
+        T = robot.fk(rng.uniform(robot.lower, robot.upper))
+        rows = rng.uniform(-7.0, 7.0, size=(8, 6))
+        rows[1, :3] = rows[0, :3]  # a wrist twin: shares the arm terms
+        _, T6, tool_point = ik_closed._pose(robot, P, T)
+        got = ik_closed._fk_errors(P, rows.tolist(), T6, tool_point)
+        for q, (dp, dr) in zip(rows, got, strict=True):
+            want_p, want_r = fk_errors_by_robot(robot, q, T)
+            assert dp == pytest.approx(want_p, rel=1e-12, abs=1e-13)
+            assert dr == pytest.approx(want_r, rel=1e-9, abs=1e-12)
+
+
+def test_near_rigid_base_errors_come_from_the_robot_chain():
+    # a base rotation orthonormal only to ~5e-11 (Robot accepts 1e-9): FK(q) then misses T
+    # by ~1e-11, and the reported errors must say so rather than the frame-0 rounding
+    base = spatial.translation(0.4, 0.2, 0.1) @ spatial.rot_z(0.3)
+    base[0, 1] += 5e-11
+    robot = P560.with_(name="near_rigid", base=base)
+    assert not ik_closed._params(robot).frame0
+    T = robot.fk(robot.pose("qn"))
+    sols = puma_ik(robot, T)
+    assert len(sols) == 8
+    for s in sols:
+        dp, dr = fk_errors_by_robot(robot, s.q, T)
+        assert abs(s.position_error - dp) < 1e-15
+        assert abs(s.orientation_error - dr) < 1e-15
+    assert max(s.position_error for s in sols) > 1e-12  # the base's error is seen
+
+
+EDGE_ANGLES = [0.0, -0.0, np.pi, -np.pi, np.nextafter(np.pi, 0), 2 * np.pi, -2 * np.pi, 1e-17]
+
+
+@pytest.mark.parametrize("robot", [P560, P260], ids=["puma560", "puma260"])
+@settings(max_examples=150, deadline=None)
+@given(data=st.data())
+def test_joint_rows_equal_wrap_batch_to_the_bit(robot, data):
+    # the hand-written wrap of the single-pose path against Robot.wrap_batch, including
+    # values exactly on the limits, at +-pi and half a turn from q_current (rint ties)
+    P = ik_closed._params(robot)
+    edges = EDGE_ANGLES + robot.lower.tolist() + robot.upper.tolist()
+    angle = st.one_of(st.floats(-13.0, 13.0), st.sampled_from(edges))
+    theta = np.array(data.draw(st.lists(angle, min_size=6, max_size=6))) + P.offset
+    Q = np.pi - np.mod(np.pi - (theta - P.offset), TWO_PI)  # wrapped to (-pi, pi]
+    near = None
+    if data.draw(st.booleans()):
+        near = np.array(data.draw(st.lists(angle, min_size=6, max_size=6)))
+        if data.draw(st.booleans()):  # exactly half a turn away
+            near = Q + np.pi * np.array(
+                data.draw(st.lists(st.sampled_from([-1, 1]), min_size=6, max_size=6))
+            )
+    near_t = (None,) * 6 if near is None else tuple((near * (1.0 / TWO_PI)).tolist())
+    th = theta.tolist()
+    branch = (0, tuple(th[:3]), False, [tuple(th[3:])])
+    _, _, Qs, rows, flags = ik_closed._joint_rows(P, [branch], near_t, True)
+    W, ok = robot.wrap_batch(Q, near)
+    assert Qs[0] == Q.tolist()
+    assert rows[0] == (W if ok.all() else Q).tolist()
+    assert flags[0] == (None if ok.all() else tuple(ok.tolist()))

@@ -57,6 +57,13 @@ pose is exact. (Rounding puts |sin theta5| of a pose made with q5 = 0 near 1e-16
 a pose that lands above 1e-12 is solved as merely near-singular: exact, flagged, with q4
 taken from the pose.) A wrist centre on the joint 1 axis of an arm with d3 = 0 leaves q1
 free: it is set to the current q1 (or 0) and the solutions are flagged singular.
+
+Speed: :func:`puma_ik_report` (one pose, where per-call overhead is everything) works on
+Python floats, which beat numpy calls on arrays of eight rows: the joint values go through
+the arithmetic of ``Robot.wrap_batch`` written out per joint (:func:`_joint_rows`, the
+same bits), and every returned q is checked by forward kinematics of the Puma chain
+written out in frame 0 (:func:`_fk_errors`; the robot's own numpy chain when base or tool
+is rigid only to within 1e-9). :func:`puma_ik_batch` vectorises over poses instead.
 """
 
 from __future__ import annotations
@@ -94,9 +101,12 @@ ALIGNED_TOL = 1e-12
 DEDUPE_TOL = 1e-9  # rad: solutions closer than this (modulo 2 pi) are the same
 REACH_TOL = 1e-12  # m: slack on the reach tests (points on the boundary are reachable)
 EXACT_TOL = 1e-9  # m and rad: a solution is exact when FK(q) is this close to T
+_ORTHO_TOL = 1e-13  # |R^T R - I| of base and tool below which they count as exact rotations
 _DEGENERATE = 1e-6  # branch separation below which duplicates are looked for
 _ALPHA = np.radians([90.0, 0.0, -90.0, 90.0, -90.0, 0.0])
 _TWO_PI = 2.0 * math.pi
+_CF = "closed-form"  # IKSolution.method
+_INV_TWO_PI = 1.0 / _TWO_PI  # as Robot.wrap_batch computes turns
 _PI = math.pi
 
 
@@ -112,12 +122,22 @@ class _Puma:
     L: float  # forearm length sqrt(a3^2 + d4^2), m
     gamma: float  # atan2(d4, a3), rad
     offset: Array  # (6,) rad
-    plain: bool  # base and tool are both the identity
+    off: tuple[float, ...]  # the same as floats, rad
+    base_eye: bool  # the base is the identity
+    tool_eye: bool  # the tool is the identity
+    # base and tool rotations orthonormal to rounding (ORTHO_TOL): FK errors can be
+    # measured in frame 0 (see _fk_errors); else FK runs through the robot's own chain
+    frame0: bool
     base_inv: Array  # (4, 4)
     tool_inv: Array  # (4, 4)
+    tool_t: tuple[float, float, float] | None  # the tool's translation (m); None when 0
+    # per joint, as floats: offset, limits (lo, hi) in rad and in turns with the 1e-12 wrap
+    # slack (lo_t, hi_t): exactly the numbers Robot.wrap_batch uses
+    joints: tuple[tuple[float, float, float, float, float], ...]
 
 
 _CACHE: weakref.WeakKeyDictionary[Robot, _Puma] = weakref.WeakKeyDictionary()
+_LAST: tuple[weakref.ref[Robot] | None, _Puma | None] = (None, None)  # the last robot seen
 
 
 def _check_structure(robot: Robot) -> _Puma:
@@ -149,6 +169,12 @@ def _check_structure(robot: Robot) -> _Puma:
             f"spherical wrist a4 = a5 = a6 = d5 = d6 = 0): " + "; ".join(bad)
         )
     offset = np.array([j.offset for j in J])
+    base_eye = bool((robot.base == np.eye(4)).all())
+    tool_eye = bool((robot.tool == np.eye(4)).all())
+    Rs = np.stack([robot.base[:3, :3], robot.tool[:3, :3]])
+    deviation = np.abs(Rs.transpose(0, 2, 1) @ Rs - np.eye(3)).max()
+    lo, hi = robot._lo.tolist(), robot._hi.tolist()
+    lo_t, hi_t = robot._lo_turns.tolist(), robot._hi_turns.tolist()
     return _Puma(
         a2=float(a2),
         a3=float(a3),
@@ -158,19 +184,29 @@ def _check_structure(robot: Robot) -> _Puma:
         L=L,
         gamma=math.atan2(d4, a3),
         offset=offset,
-        plain=bool((robot.base == np.eye(4)).all() and (robot.tool == np.eye(4)).all()),
+        off=tuple(offset.tolist()),
+        base_eye=base_eye,
+        tool_eye=tool_eye,
+        frame0=bool(deviation <= _ORTHO_TOL),
         base_inv=spatial.invert(robot.base),
         tool_inv=spatial.invert(robot.tool),
+        tool_t=tuple(robot.tool[:3, 3].tolist()) if robot.tool[:3, 3].any() else None,
+        joints=tuple(zip(offset.tolist(), lo, hi, lo_t, hi_t, strict=True)),
     )
 
 
 def _params(robot: Robot) -> _Puma:
     """The robot's Puma parameters (validated once per robot: robots are immutable)."""
+    global _LAST
+    last, P = _LAST  # one read: another thread may replace the pair, never half of it
+    if last is not None and last() is robot and P is not None:
+        return P  # the same robot again: skips building a weak reference per call
     if not isinstance(robot, Robot):
         raise KinematicsError(f"puma_ik needs a Robot, got {type(robot).__name__}")
     P = _CACHE.get(robot)
     if P is None:
         P = _CACHE[robot] = _check_structure(robot)
+    _LAST = (weakref.ref(robot), P)
     return P
 
 
@@ -220,12 +256,18 @@ def _unreachable(P: _Puma, r: float, z: float, rho: float) -> str:
     )
 
 
-def _solve_one(
-    P: _Puma, T6: list[list[float]], ref: Array | None
-) -> tuple[list[tuple[int, list[float], bool]], bool, str]:
-    """DH angles of every branch of one stripped pose T6 (rows as lists).
+_Branch = tuple[int, tuple[float, float, float], bool, list[tuple[float, float, float]]]
+"""One arm/elbow branch: (slot of its first wrist in CONFIGS, DH angles theta1..3 (rad),
+singular, [DH angles theta4..6 (rad) of the wrist, then of its flip twin if distinct])."""
 
-    Returns ([(slot in CONFIGS, theta (6,), singular)], maybe_duplicates, reason).
+
+def _solve_one(
+    P: _Puma, T6: list[list[float]], ref: list[float] | None
+) -> tuple[list[_Branch], bool, str]:
+    """DH angles of every branch of one stripped pose T6 (rows as lists; ``ref`` the
+    current q as floats, rad, or None).
+
+    Returns (branches, maybe_duplicates, reason); the solutions come in CONFIGS order.
     """
     (r00, _, r02, px), (r10, _, r12, py), (r20, _, r22, pz) = T6[0], T6[1], T6[2]
     z = pz - P.d1
@@ -239,33 +281,32 @@ def _solve_one(
         return [], False, _unreachable(P, r, z, rho)
     hr = math.sqrt(max(hr2, 0.0))
     shoulder_free = r < REACH_TOL  # only reachable with d3 = 0: theta1 is free
-    if shoulder_free:
-        phi = (0.0 if ref is None else float(ref[0])) + float(P.offset[0])
-    else:
-        phi = math.atan2(py, px)
+    q1 = 0.0 if ref is None else ref[0]
+    phi = q1 + P.off[0] if shoulder_free else math.atan2(py, px)
     delta = math.atan2(d3, hr)
-    a2, L = P.a2, P.L
+    a2, L, gamma = P.a2, P.L, P.gamma
     cpsi = (a2 * a2 + rho2 - L * L) / (2.0 * a2 * rho) if rho > 0.0 else 0.0
     psi = math.acos(min(1.0, max(-1.0, cpsi)))
     maybe_dup = hr < _DEGENERATE * max(r, 1e-300) or min(psi, _PI - psi) < _DEGENERATE
-    ref4 = (0.0 if ref is None else float(ref[3])) + float(P.offset[3])
-    out: list[tuple[int, list[float], bool]] = []
+    ref4 = (0.0 if ref is None else ref[3]) + P.off[3]
+    cos, sin, atan2 = math.cos, math.sin, math.atan2
+    out: list[_Branch] = []
     slot = 0
     for right in (False, True):
         if right:
             t1, h = phi + delta, hr
         else:
             t1, h = phi + _PI - delta, -hr
-        c1, s1 = math.cos(t1), math.sin(t1)
-        beta = math.atan2(z, h)
+        c1, s1 = cos(t1), sin(t1)
+        beta = atan2(z, h)
         ax1 = c1 * r02 + s1 * r12  # approach and normal vectors along x1 and -z1
         ay3 = c1 * r12 - s1 * r02
         nx1 = c1 * r00 + s1 * r10
         ny3 = c1 * r10 - s1 * r00
         for up in (True, False):
             t2 = beta + psi if up == right else beta - psi
-            t23 = math.atan2(z - a2 * math.sin(t2), h - a2 * math.cos(t2)) - P.gamma
-            c23, s23 = math.cos(t23), math.sin(t23)
+            t23 = atan2(z - a2 * sin(t2), h - a2 * cos(t2)) - gamma
+            c23, s23 = cos(t23), sin(t23)
             m02 = c23 * ax1 + s23 * r22
             m12 = ay3
             m22 = c23 * r22 - s23 * ax1
@@ -273,35 +314,230 @@ def _solve_one(
             m10 = ny3
             m20 = c23 * r20 - s23 * nx1
             s5abs = math.hypot(m02, m12)
-            singular = s5abs < SINGULAR_TOL or shoulder_free
             if s5abs < ALIGNED_TOL:
                 t4, t5 = ref4, (0.0 if m22 > 0.0 else _PI)
             else:
-                t4, t5 = math.atan2(m12, m02), math.atan2(-s5abs, m22)
-            c4, s4, c5, s5 = math.cos(t4), math.sin(t4), math.cos(t5), math.sin(t5)
-            t6 = math.atan2(-s4 * m00 + c4 * m10, c5 * (c4 * m00 + s4 * m10) + s5 * m20)
-            out.append((slot, [t1, t2, t23 - t2, t4, t5, t6], singular))
+                t4, t5 = atan2(m12, m02), atan2(-s5abs, m22)
+            c4, s4, c5, s5 = cos(t4), sin(t4), cos(t5), sin(t5)
+            t6 = atan2(-s4 * m00 + c4 * m10, c5 * (c4 * m00 + s4 * m10) + s5 * m20)
+            wrists = [(t4, t5, t6)]
             if s5abs >= ALIGNED_TOL:
-                out.append((slot + 1, [t1, t2, t23 - t2, t4 + _PI, -t5, t6 + _PI], singular))
+                wrists.append((t4 + _PI, -t5, t6 + _PI))
+            singular = s5abs < SINGULAR_TOL or shoulder_free
+            out.append((slot, (t1, t2, t23 - t2), singular, wrists))
             slot += 2
     return out, maybe_dup or shoulder_free, ""
 
 
-def _fk_squared_errors(robot: Robot, Q: Array, T: Array) -> list[list[float]]:
-    """For each Q[i] (rad), the squared distances between the columns of FK(Q[i]) (tool in
-    the base frame) and of T: x, y, z axes and position (m^2). The rotation angle between
-    the two is 2 asin(|R1 - R2|_F / sqrt(8)), accurate for small angles."""
+def _shift(P: _Puma, j: int, q: float, near_t: float | None) -> float | None:
+    """:meth:`Robot.wrap_batch` for the value ``q`` (rad) of joint ``j`` (0-based), in floats.
+
+    The 2 pi-equivalent of q within the joint's limits nearest to ``near_t`` (turns; None:
+    to q itself), or None when there is none. The same operations as ``wrap_batch``
+    (limits in turns with its slack, k rounded half to even like np.rint), so the same
+    number to the bit.
+    """
+    _, lo, hi, lo_t, hi_t = P.joints[j]
+    t = q * _INV_TWO_PI
+    k_lo = math.ceil(lo_t - t)
+    k_hi = math.floor(hi_t - t)
+    if k_lo > k_hi:
+        return None
+    k = 0 if near_t is None else round(near_t - t)
+    k = k_lo if k < k_lo else k_hi if k > k_hi else k
+    x = q + _TWO_PI * k
+    return lo if x < lo else hi if x > hi else x
+
+
+_Rows = tuple[
+    list[int], list[bool], list[list[float]], list[list[float]], list[tuple[bool, ...] | None]
+]
+
+
+def _joint_rows(
+    P: _Puma, branches: list[_Branch], near: tuple[float | None, ...], want_Q: bool
+) -> _Rows:
+    """The joint values of every solution in ``branches``, in CONFIGS order.
+
+    ``near`` (6,) is q_current in turns (q / 2 pi), or all None. Returns lists over the
+    solutions: slot in CONFIGS, singular, ``Q`` (theta - offset wrapped to (-pi, pi],
+    rad, as :func:`_wrap_pi`; empty unless ``want_Q``), the returned q (rad) and
+    ``flags``. The returned q is each joint's in-limit representative, nearest to
+    ``near`` (else to its Q value), exactly as ``Robot.wrap_batch(Q, near)`` gives it,
+    when every joint has one; else it is Q, and ``flags`` says per joint whether it has
+    one (None when all do). A value within its limits and within half a turn of ``near``
+    is its own representative (wrap_batch's k = 0); :func:`_shift` does the others.
+    Written out joint by joint: this runs for every pose.
+    """
+    (o1, l1, h1, _, _), (o2, l2, h2, _, _), (o3, l3, h3, _, _) = P.joints[:3]
+    (o4, l4, h4, _, _), (o5, l5, h5, _, _), (o6, l6, h6, _, _) = P.joints[3:]
+    n1, n2, n3, n4, n5, n6 = near
+    pi, two_pi, inv = _PI, _TWO_PI, _INV_TWO_PI
+    slots: list[int] = []
+    singular: list[bool] = []
+    Qs: list[list[float]] = []
+    rows: list[list[float]] = []
+    flags: list[tuple[bool, ...] | None] = []
+    for slot, (t1, t2, t3), sing, wrists in branches:
+        q1 = pi - (pi - (t1 - o1)) % two_pi
+        q2 = pi - (pi - (t2 - o2)) % two_pi
+        q3 = pi - (pi - (t3 - o3)) % two_pi
+        w1, w2, w3 = q1, q2, q3
+        if not (l1 <= q1 <= h1 and (n1 is None or -0.5 <= n1 - q1 * inv <= 0.5)):
+            w1 = _shift(P, 0, q1, n1)
+        if not (l2 <= q2 <= h2 and (n2 is None or -0.5 <= n2 - q2 * inv <= 0.5)):
+            w2 = _shift(P, 1, q2, n2)
+        if not (l3 <= q3 <= h3 and (n3 is None or -0.5 <= n3 - q3 * inv <= 0.5)):
+            w3 = _shift(P, 2, q3, n3)
+        for k, (t4, t5, t6) in enumerate(wrists):
+            q4 = pi - (pi - (t4 - o4)) % two_pi
+            q5 = pi - (pi - (t5 - o5)) % two_pi
+            q6 = pi - (pi - (t6 - o6)) % two_pi
+            w4, w5, w6 = q4, q5, q6
+            if not (l4 <= q4 <= h4 and (n4 is None or -0.5 <= n4 - q4 * inv <= 0.5)):
+                w4 = _shift(P, 3, q4, n4)
+            if not (l5 <= q5 <= h5 and (n5 is None or -0.5 <= n5 - q5 * inv <= 0.5)):
+                w5 = _shift(P, 4, q5, n5)
+            if not (l6 <= q6 <= h6 and (n6 is None or -0.5 <= n6 - q6 * inv <= 0.5)):
+                w6 = _shift(P, 5, q6, n6)
+            slots.append(slot + k)
+            singular.append(sing)
+            if want_Q:
+                Qs.append([q1, q2, q3, q4, q5, q6])
+            if w1 is None or w2 is None or w3 is None or w4 is None or w5 is None or w6 is None:
+                rows.append([q1, q2, q3, q4, q5, q6])
+                flags.append(
+                    (
+                        w1 is not None,
+                        w2 is not None,
+                        w3 is not None,
+                        w4 is not None,
+                        w5 is not None,
+                        w6 is not None,
+                    )
+                )
+            else:
+                rows.append([w1, w2, w3, w4, w5, w6])
+                flags.append(None)
+    return slots, singular, Qs, rows, flags
+
+
+def _fk_errors(
+    P: _Puma,
+    rows: list[list[float]],
+    T6: list[list[float]],
+    tool_point: tuple[float, float, float],
+) -> list[tuple[float, float]]:
+    """Position (m) and orientation (rad) errors of FK(q) against the target T, per q (rad)
+    of ``rows``, measured in frame 0 (needs ``P.frame0``).
+
+    FK(q) = base A1(q1) ... A6(q6) tool is the tool pose in the base-reference frame and
+    T = base T6 tool (T6 the flange pose in frame 0, ``tool_point`` = (inv(base) T)[:3, 3]
+    its tool point in frame 0, m). The errors, the distance between the tool points and
+    2 asin(|R_FK - R_T|_F / sqrt(8)), do not change under the base and tool rotations, so
+    they are those of A1 ... A6 against T6: the tool points w + R06 t (t the tool's
+    translation) against ``tool_point``, the rotations R06 against R6. The Puma's DH
+    chain written out (``a1 = d2 = a4 = a5 = a6 = d5 = d6 = 0``, the alphas of
+    :func:`_check_structure`): wrist centre w = Rz(theta1) Rx(90) (a2 c2 + a3 c23 -
+    d4 s23, a2 s2 + a3 s23 + d4 c23, d3) + (0, 0, d1); R06 = R03 R36, and
+    |R06 - R6|_F = |R36 - R03^T R6|_F, |w + R06 t - g| = |R03^T (w - g) + R36 t|.
+    Consecutive rows with the same q1..q3 (wrist twins) share the arm terms.
+    """
+    b00, b01, b02 = T6[0][:3]
+    b10, b11, b12 = T6[1][:3]
+    b20, b21, b22 = T6[2][:3]
+    tool = P.tool_t is not None
+    tx, ty, tz = P.tool_t or (0.0, 0.0, 0.0)
+    gx, gy, gz = tool_point
+    o1, o2, o3, o4, o5, o6 = P.off
+    a2, a3, d1, d3, d4 = P.a2, P.a3, P.d1, P.d3, P.d4
+    cos, sin, sqrt, asin = math.cos, math.sin, math.sqrt, math.asin
+    out: list[tuple[float, float]] = []
+    p1 = p2 = p3 = None  # q1..q3 of the previous row (the same objects: the same values)
+    for q1, q2, q3, q4, q5, q6 in rows:
+        if q1 is not p1 or q2 is not p2 or q3 is not p3:
+            p1, p2, p3 = q1, q2, q3
+            t1, t2 = q1 + o1, q2 + o2
+            t23 = t2 + (q3 + o3)
+            c1, s1, c23, s23 = cos(t1), sin(t1), cos(t23), sin(t23)
+            x = a2 * cos(t2) + a3 * c23 - d4 * s23
+            # R03 = [[c1 c23, -s1, -c1 s23], [s1 c23, c1, -s1 s23], [s23, 0, c23]]
+            u00, u10, u02, u12 = c1 * c23, s1 * c23, -c1 * s23, -s1 * s23
+            # N = R03^T R6: the wrist rotation the target asks for
+            n00 = u00 * b00 + u10 * b10 + s23 * b20
+            n01 = u00 * b01 + u10 * b11 + s23 * b21
+            n02 = u00 * b02 + u10 * b12 + s23 * b22
+            n10 = c1 * b10 - s1 * b00
+            n11 = c1 * b11 - s1 * b01
+            n12 = c1 * b12 - s1 * b02
+            n20 = u02 * b00 + u12 * b10 + c23 * b20
+            n21 = u02 * b01 + u12 * b11 + c23 * b21
+            n22 = u02 * b02 + u12 * b12 + c23 * b22
+            # e = R03^T (w - g): the wrist centre's offset from the target tool point
+            ex = c1 * x + s1 * d3 - gx
+            ey = s1 * x - c1 * d3 - gy
+            ez = a2 * sin(t2) + a3 * s23 + d4 * c23 + d1 - gz
+            e0 = u00 * ex + u10 * ey + s23 * ez
+            e1 = c1 * ey - s1 * ex
+            e2 = u02 * ex + u12 * ey + c23 * ez
+        t4, t5, t6 = q4 + o4, q5 + o5, q6 + o6
+        c4, s4, c5, s5, c6, s6 = cos(t4), sin(t4), cos(t5), sin(t5), cos(t6), sin(t6)
+        c4c5, s4c5 = c4 * c5, s4 * c5
+        # R36 = Rz(theta4) Rx(90) Rz(theta5) Rx(-90) Rz(theta6), by columns
+        v00, v10, v20 = c4c5 * c6 - s4 * s6, s4c5 * c6 + c4 * s6, s5 * c6
+        v01, v11, v21 = -c4c5 * s6 - s4 * c6, c4 * c6 - s4c5 * s6, -s5 * s6
+        v02, v12, v22 = -c4 * s5, -s4 * s5, c5
+        if tool:  # R03^T (tool point - target tool point)
+            dx = e0 + v00 * tx + v01 * ty + v02 * tz
+            dy = e1 + v10 * tx + v11 * ty + v12 * tz
+            dz = e2 + v20 * tx + v21 * ty + v22 * tz
+        else:
+            dx, dy, dz = e0, e1, e2
+        f0, f1, f2 = v00 - n00, v01 - n01, v02 - n02  # |R36 - N|_F^2, by rows
+        f = f0 * f0 + f1 * f1 + f2 * f2
+        f0, f1, f2 = v10 - n10, v11 - n11, v12 - n12
+        f += f0 * f0 + f1 * f1 + f2 * f2
+        f0, f1, f2 = v20 - n20, v21 - n21, v22 - n22
+        f += f0 * f0 + f1 * f1 + f2 * f2
+        f = math.sqrt(f / 8.0)
+        angle = 2.0 * asin(f if f < 1.0 else 1.0)
+        out.append((sqrt(dx * dx + dy * dy + dz * dz), angle))
+    return out
+
+
+def _fk_errors_batch(robot: Robot, Q: Array, T: Array) -> list[tuple[float, float]]:
+    """:func:`_fk_errors` through ``Robot._fk_unchecked`` (the robot's DH chain with its
+    base and tool) for joint vectors Q (m, 6) rad against the tool pose T (4, 4)."""
     D = robot._fk_unchecked(Q)[:, :3, :] - T[:3, :]  # Q is the solver's own, finite
-    return (D * D).sum(axis=1).tolist()
+    out = []
+    for ex, ey, ez, ep in (D * D).sum(axis=1).tolist():  # squared column distances, m^2
+        out.append((math.sqrt(ep), 2.0 * math.asin(min(1.0, math.sqrt((ex + ey + ez) / 8.0)))))
+    return out
 
 
-def _pose(robot: Robot, P: _Puma, T: ArrayLike) -> tuple[Array, list[list[float]]]:
-    """Validate T (4x4 rigid, tool pose in the base frame); return it and T6 = inv(base) T
-    inv(tool) (the flange pose in frame 0) as nested lists."""
-    M = spatial.as_transforms(T, rigid=True, what=f"robot '{robot.name}': the target pose")
-    if M.shape != (4, 4):
-        raise GeometryError(f"robot '{robot.name}': the target pose must be one 4x4 matrix")
-    return M, (M if P.plain else P.base_inv @ M @ P.tool_inv).tolist()
+def _pose(
+    robot: Robot, P: _Puma, T: ArrayLike
+) -> tuple[Array, list[list[float]], tuple[float, float, float]]:
+    """Validate T (4x4 rigid, tool pose in the base frame); return it, T6 = inv(base) T
+    inv(tool) (the flange pose in frame 0) as nested lists and the tool point of T in
+    frame 0, (inv(base) T)[:3, 3] (m)."""
+    M = None
+    if type(T) is np.ndarray and T.shape == (4, 4) and T.dtype == np.float64:
+        rows = T.tolist()  # the common case: checked in floats, no copy needed
+        if rows[3] == [0.0, 0.0, 0.0, 1.0] and spatial._valid_single(rows, True):
+            M = T
+    if M is None:
+        M = spatial.as_transforms(T, rigid=True, what=f"robot '{robot.name}': the target pose")
+        if M.shape != (4, 4):
+            raise GeometryError(f"robot '{robot.name}': the target pose must be one 4x4 matrix")
+        rows = M.tolist()
+    if not P.base_eye:
+        G = P.base_inv @ M
+        rows = G.tolist()
+    tool_point = (rows[0][3], rows[1][3], rows[2][3])
+    if not P.tool_eye:
+        rows = ((M if P.base_eye else G) @ P.tool_inv).tolist()
+    return M, rows, tool_point
 
 
 @functools.cache
@@ -340,54 +576,51 @@ def puma_ik_report(
     """
     P = _params(robot)
     ref = _reference(robot, q_current)
-    M, T6 = _pose(robot, P, T)
-    branches, maybe_dup, reason = _solve_one(P, T6, ref)
+    M, T6, tool_point = _pose(robot, P, T)
+    ref_l = None if ref is None else ref.tolist()
+    branches, maybe_dup, reason = _solve_one(P, T6, ref_l)
     if not branches:
         return [], reason
-    Q = _wrap_pi(np.array([b[1] for b in branches]) - P.offset)
+    near: tuple[float | None, ...] = (None,) * 6
+    if ref_l is not None:
+        near = tuple(v * _INV_TWO_PI for v in ref_l)  # turns, as wrap_batch computes them
+    slots, singular, Qs, rows, flags = _joint_rows(P, branches, near, maybe_dup)
+    m = len(rows)
     if maybe_dup:
-        keep = _distinct(Q)
-        branches = [b for b, k in zip(branches, keep, strict=True) if k]
-        Q = Q[keep]
-    W, ok = robot.wrap_batch(Q, ref)
-    Qw = np.where(ok.all(axis=-1, keepdims=True), W, Q)
-    sq = _fk_squared_errors(robot, Qw, M)
-    okl = ok.tolist()
-    inside = [all(row) for row in okl]
-    m = len(branches)
-    if ref is None:
-        order = sorted(range(m), key=lambda i: (not inside[i], branches[i][0]))
+        keep = _distinct(np.array(Qs)).tolist()
+        pick = [i for i in range(m) if keep[i]]
+        slots, singular = [slots[i] for i in pick], [singular[i] for i in pick]
+        rows, flags = [rows[i] for i in pick], [flags[i] for i in pick]
+        m = len(rows)
+    Qw = np.array(rows)
+    # FK of each returned q against T; when base or tool is rigid only to within 1e-9,
+    # through the robot's own chain (which applies them as they are)
+    errors = _fk_errors(P, rows, T6, tool_point) if P.frame0 else _fk_errors_batch(robot, Qw, M)
+    if ref is None:  # the rows come in slot order
+        order, outside = [], []
+        for i, f in enumerate(flags):
+            (order if f is None else outside).append(i)
+        order += outside
     else:
         dist = np.abs(Qw - ref)
         far, total = dist.max(axis=1).tolist(), dist.sum(axis=1).tolist()
-        order = sorted(range(m), key=lambda i: (not inside[i], far[i], total[i], branches[i][0]))
+        order = sorted(range(m), key=lambda i: (flags[i] is not None, far[i], total[i], slots[i]))
+    qs = list(Qw)
     sols = []
     for i in order:
-        slot, _, singular = branches[i]
-        e = sq[i]  # squared column distances (x, y, z axes; position) of FK(q) and T
-        dp = math.sqrt(e[3])
-        dr = 2.0 * math.asin(min(1.0, math.sqrt((e[0] + e[1] + e[2]) / 8.0)))  # |dR|_F rule
-        if not inside[i]:
-            why = _limits_reason(tuple(okl[i]))
+        dp, dr = errors[i]
+        bad = flags[i]
+        if bad is not None:
+            why = _limits_reason(bad)
         elif dp > EXACT_TOL or dr > EXACT_TOL:
             why = f"pose not reached exactly: errors {dp:.1e} m, {dr:.1e} rad"
         else:
             why = ""
-        sols.append(
-            IKSolution(
-                q=Qw[i],
-                success=not why,
-                config=CONFIGS[slot],
-                within_limits=inside[i],
-                singular=singular,
-                position_error=dp,
-                orientation_error=dr,
-                iterations=0,
-                reason=why,
-                method="closed-form",
-            )
-        )
-    if not any(inside):
+        # positional (the fastest): q, success, config, within_limits, singular,
+        # position_error, orientation_error, iterations, reason, method
+        c = CONFIGS[slots[i]]
+        sols.append(IKSolution(qs[i], not why, c, bad is None, singular[i], dp, dr, 0, why, _CF))
+    if all(f is not None for f in flags):
         reason = f"no solution within the joint limits ({m} found outside them)"
     return sols, reason
 
