@@ -15,7 +15,19 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
   body1 = the gripper body, body2 = the part, with explicit ``data`` (anchor 0, relpose
   identity, torquescale 1; the simulator writes the captured relative pose on grasp)
   and a stiff ``solref`` (0.004, 1);
-- camera ``C``: an MJCF camera at the position, turned so its -z axis points to the target.
+- camera ``C``: an MJCF camera at the position, turned so its -z axis points to the target;
+- physics settings, which the kinematic simulator ignores: the robots' position actuators
+  (one per arm joint and finger slide, named as the joint: ``puma_1.j1``,
+  ``puma_1.gripper.left_slide``), ``gravcomp`` on robot bodies and joint armature (see
+  :mod:`workcell.robots.mjcf`), ``timestep`` (s), the ``implicitfast`` integrator (it
+  integrates the servos' damping implicitly, stable at the default timestep) and stiff
+  contacts (every collision geom, the ground included, has ``solref`` =
+  :data:`~workcell.robots.mjcf.CONTACT_SOLREF` and ``solimp`` =
+  :data:`~workcell.robots.mjcf.CONTACT_SOLIMP`: with MuJoCo's default contacts a resting
+  part sinks ~0.2 mm and a faceted one creeps ~0.2 mm/s; these give ~0.002 mm and none),
+  so the exported file plays in MuJoCo's viewer with its actuators; the keyframe
+  ``initial`` holds every actuator at its joint's initial value (load it in the viewer, or
+  ``mj_resetDataKeyframe``, before playing: ctrl 0 would drive the arms to q = 0).
 
 Initial joint values live in ``qpos0`` through each joint's ``ref``: the link bodies are
 written at their pose for the initial q (body frame ``placement @ Rz(q0)``) and
@@ -37,11 +49,14 @@ import numpy as np
 import trimesh
 
 from workcell.cell.workcell import Workcell
+from workcell.checks import is_finite_number
 from workcell.errors import GeometryError
 from workcell.files import atomic_write_bytes, atomic_write_text
 from workcell.modeller.model import Model
 from workcell.robots.meshes import convex_pieces, is_convex, stl_bytes
 from workcell.robots.mjcf import (
+    CONTACT_SOLIMP,
+    CONTACT_SOLREF,
     MESHDIR,
     add_mesh_geoms,
     body_name,
@@ -53,9 +68,20 @@ from workcell.robots.mjcf import (
 )
 from workcell.spatial import pose_from_pos_quat, quat_from_matrix, rot_z, translation
 
-__all__ = ["GRASP_SOLREF", "GROUND", "WELD_DATA", "CompiledCell", "compile_cell", "export_cell"]
+__all__ = [
+    "DEFAULT_TIMESTEP",
+    "GRASP_SOLREF",
+    "GROUND",
+    "INITIAL_KEY",
+    "WELD_DATA",
+    "CompiledCell",
+    "compile_cell",
+    "export_cell",
+]
 
 GROUND = "ground"
+INITIAL_KEY = "initial"
+DEFAULT_TIMESTEP = 0.002  # s: MuJoCo's default; the grasp weld's solref needs <= 0.002
 GRASP_SOLREF = (0.004, 1.0)
 # anchor (3) | relpos (3) | relquat wxyz (4) | torquescale | flag (0: relpose given)
 WELD_DATA = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
@@ -71,7 +97,9 @@ class CompiledCell:
     (arm joints in DH order), ``finger_joints`` (left, right slides; robots with a
     gripper), ``tool_sites``, ``gripper_bodies``, ``part_bodies`` (movable parts),
     ``free_joints`` (movable parts), ``welds`` ((robot, part) -> equality name),
-    ``cameras``. ``assets`` holds the mesh files (name -> STL bytes).
+    ``cameras``, ``actuators`` (the robot's position actuators: arm joints in DH order,
+    then the fingers), ``initial_ctrl`` (joint name -> the initial target of its
+    actuator). ``assets`` holds the mesh files (name -> STL bytes).
     """
 
     spec: mujoco.MjSpec
@@ -85,6 +113,8 @@ class CompiledCell:
     free_joints: dict[str, str] = field(default_factory=dict)
     welds: dict[tuple[str, str], str] = field(default_factory=dict)
     cameras: dict[str, str] = field(default_factory=dict)
+    actuators: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    initial_ctrl: dict[str, float] = field(default_factory=dict)
     assets: Mapping[str, bytes] = field(default_factory=dict)
 
 
@@ -165,9 +195,13 @@ def _set_initial_q(child: mujoco.MjSpec, robot, q: np.ndarray) -> None:  # noqa:
         child.joint(joint_name(robot, "", i)).ref = float(q[i])
 
 
-def _build(cell: Workcell) -> CompiledCell:
+def _build(cell: Workcell, timestep: float) -> CompiledCell:
+    if not (is_finite_number(timestep) and timestep > 0):
+        raise GeometryError(f"timestep must be a finite number of seconds > 0, got {timestep!r}")
     spec = mujoco.MjSpec()
     spec.compiler.degree = False
+    spec.option.timestep = float(timestep)
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.compiler.meshdir = MESHDIR
     spec.modelname = cell.name
     assets: dict[str, bytes] = {}
@@ -177,6 +211,8 @@ def _build(cell: Workcell) -> CompiledCell:
         type=mujoco.mjtGeom.mjGEOM_PLANE,
         size=[0.0, 0.0, 0.05],
         rgba=[0.85, 0.85, 0.85, 1.0],
+        solref=list(CONTACT_SOLREF),
+        solimp=list(CONTACT_SOLIMP),
     )
     spec.worldbody.add_light(name="light", pos=[0, 0, 3], dir=[0, 0, -1])
     m = cell.model
@@ -202,9 +238,11 @@ def _build(cell: Workcell) -> CompiledCell:
         out.robot_prefixes[r.name] = prefix
         out.joint_names[r.name] = tuple(joint_name(r.robot, prefix, i) for i in range(r.robot.dof))
         out.tool_sites[r.name] = f"{prefix}tool"
+        out.actuators[r.name] = out.joint_names[r.name]  # actuators are named as their joints
         if r.robot.gripper is not None:
             out.gripper_bodies[r.name] = gripper_body_name(r.robot, prefix)
             out.finger_joints[r.name] = finger_joint_names(r.robot, prefix)
+            out.actuators[r.name] += out.finger_joints[r.name]
     for rname, gbody in out.gripper_bodies.items():
         for pname, pbody in out.part_bodies.items():
             ename = f"grasp.{rname}.{pname}"
@@ -223,31 +261,52 @@ def _build(cell: Workcell) -> CompiledCell:
         pos, quat = _pos_quat(c.pose())
         spec.worldbody.add_camera(name=c.name, pos=pos, quat=quat, fovy=c.fovy)
         out.cameras[c.name] = c.name
+    targets = {}  # each actuator's initial target: its joint's initial value
+    for r in cell.robots.values():
+        targets.update(zip(out.joint_names[r.name], np.asarray(r.q, dtype=float), strict=True))
+        if r.robot.gripper is not None:  # fingers open
+            targets.update(dict.fromkeys(out.finger_joints[r.name], r.robot.gripper.finger_travel))
+    if targets:
+        spec.add_key(name=INITIAL_KEY, ctrl=[float(v) for v in targets.values()])
+    out.initial_ctrl = targets
     spec.assets = assets
     out.assets = assets
     return out
 
 
-def compile_cell(cell: Workcell) -> CompiledCell:
-    """Build the cell's MjSpec and compile it (a MuJoCo error raises GeometryError)."""
-    out = _build(cell)
+def compile_cell(cell: Workcell, *, timestep: float = DEFAULT_TIMESTEP) -> CompiledCell:
+    """Build the cell's MjSpec and compile it (a MuJoCo error raises GeometryError).
+
+    ``timestep`` (s): the physics timestep written into the model (the kinematic
+    simulator does not use it).
+    """
+    out = _build(cell, timestep)
     try:
-        out.model = out.spec.compile()
+        out.model = m = out.spec.compile()
     except ValueError as exc:
         raise GeometryError(f"cell '{cell.name}' does not compile in MuJoCo: {exc}") from exc
+    if m.nkey:  # the key was written in joint-name order: put it in actuator order
+        ctrl = [out.initial_ctrl[m.joint(j).name] for j in m.actuator_trnid[:, 0]]
+        out.spec.key(INITIAL_KEY).ctrl = ctrl
+        m.key_ctrl[m.key(INITIAL_KEY).id] = ctrl
     return out
 
 
 def export_cell(
-    cell: Workcell, out_dir: str | os.PathLike, *, file_name: str | None = None
+    cell: Workcell,
+    out_dir: str | os.PathLike,
+    *,
+    file_name: str | None = None,
+    timestep: float = DEFAULT_TIMESTEP,
 ) -> Path:
     """Write the cell as one MJCF file plus STL meshes in ``out_dir/meshes``; return the XML path.
 
     The XML (default ``"{cell.name}.xml"``) names its meshes relative to itself, so the
     folder loads from any working directory, in plain MuJoCo and dm_control. The cell is
-    compiled before anything is written; every file is written atomically.
+    compiled (with the physics ``timestep``, s) before anything is written; every file is
+    written atomically.
     """
-    compiled = compile_cell(cell)
+    compiled = compile_cell(cell, timestep=timestep)
     try:
         xml = spec_to_xml(compiled.spec)
     except ValueError as exc:

@@ -20,6 +20,20 @@ joints' reference and initial value, as the solids are drawn). The tool site sit
 ``robot.tool``. Bodies on links up to two apart get ``<exclude>`` pairs (the gripper's
 bodies count as the last link).
 
+For physics (the kinematic simulator ignores all of this): collision geoms have stiff
+contacts (``solref`` :data:`CONTACT_SOLREF`, ``solimp`` :data:`CONTACT_SOLIMP`); every
+body has ``gravcomp="1"`` (the arm carries its own weight, as a real arm's
+gravity-compensating servos do; a payload is not compensated); every arm joint has an
+``armature`` (the reflected inertia of a geared motor's rotor, kg m^2 or kg;
+:data:`ARMATURE`); and every arm joint and finger slide has a position actuator of the
+joint's name (``{prefix}j1`` ...,
+``{prefix}{gripper}.left_slide`` ...): ``ctrl`` = target joint value, ctrl range = joint
+range, force ``kp (ctrl - q) - kv qdot`` without force limits (the peak forces a run
+needs are reported by the physics mode instead). The gains give each joint on its own a
+critically damped servo of natural frequency :data:`SERVO_FREQUENCY`:
+``kp = I w^2``, ``kv = 2 zeta I w`` with I the joint's diagonal entry of the mass matrix
+(armature included) at q = 0.
+
 Mesh assets are binary STL files named ``{prefix}{block}.stl``, held in ``spec.assets``;
 :func:`export_robot` writes them beside the XML (``meshdir="meshes"``, relative).
 """
@@ -47,9 +61,14 @@ from workcell.robots.robot import Joint, Robot
 from workcell.spatial import invert, is_rigid, quat_from_matrix, rot_x, rot_z, translation
 
 __all__ = [
+    "ARMATURE",
     "ARM_DENSITY",
     "COLLISION_GROUP",
+    "CONTACT_SOLIMP",
+    "CONTACT_SOLREF",
     "MESHDIR",
+    "SERVO_DAMPING",
+    "SERVO_FREQUENCY",
     "TOOL_SITE",
     "VISUAL_GROUP",
     "add_mesh_geoms",
@@ -69,6 +88,11 @@ ARM_DENSITY = 2700.0  # kg/m^3, aluminium
 VISUAL_GROUP = 2
 COLLISION_GROUP = 3
 MESHDIR = "meshes"
+ARMATURE = 0.02  # kg m^2 (revolute) or kg (prismatic): a small geared motor's reflected rotor
+SERVO_FREQUENCY = 15.0  # Hz: natural frequency of each joint's position servo
+SERVO_DAMPING = 1.0  # damping ratio of each joint's position servo
+CONTACT_SOLREF = (0.004, 1.0)  # s, damping ratio: stiff contacts (MuJoCo clamps to >= 2 dt)
+CONTACT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)  # MuJoCo's default is (0.9, 0.95, 0.001, ...)
 _EXACT = mujoco.mjtMeshInertia.mjMESH_INERTIA_EXACT
 _MESH = mujoco.mjtGeom.mjGEOM_MESH
 
@@ -222,8 +246,9 @@ def add_mesh_geoms(
 ) -> None:
     """The geoms of one solid in ``body``: visual mesh geoms that carry the mass and no
     contacts (``visuals`` = (geom name, mesh name) pairs, group 2) and massless collision
-    geoms named ``{collision_prefix}.col{i}`` on the ``collisions`` meshes (group 3).
-    ``density`` in kg/m^3; ``pos``/``quat`` place the meshes in the body (m, wxyz)."""
+    geoms named ``{collision_prefix}.col{i}`` on the ``collisions`` meshes (group 3, stiff
+    contacts: :data:`CONTACT_SOLREF`, :data:`CONTACT_SOLIMP`). ``density`` in kg/m^3;
+    ``pos``/``quat`` place the meshes in the body (m, wxyz)."""
     for geom, mesh in visuals:
         body.add_geom(
             name=geom,
@@ -249,6 +274,8 @@ def add_mesh_geoms(
             conaffinity=1,
             group=COLLISION_GROUP,
             rgba=[*rgba[:3], 0.5],
+            solref=list(CONTACT_SOLREF),
+            solimp=list(CONTACT_SOLIMP),
         )
 
 
@@ -266,6 +293,9 @@ def robot_spec(
     geometry: bool = True,
     density: float = ARM_DENSITY,
     mass: float = 0.1,
+    actuators: bool = True,
+    armature: float = ARMATURE,
+    servo_frequency: float = SERVO_FREQUENCY,
 ) -> mujoco.MjSpec:
     """An MjSpec of the robot with the tool site ``{prefix}tool`` (see the module doc).
 
@@ -273,11 +303,17 @@ def robot_spec(
     ``density`` (kg/m^3) and the gripper, if any, its bodies and finger joints; the mesh
     bytes are in ``spec.assets``. Otherwise, and for links without solids, each body
     gets a placeholder inertia (``mass`` kg, a 5 cm solid sphere). Joint ranges are the
-    robot's limits (radians / metres).
+    robot's limits (radians / metres). Every body has ``gravcomp=1`` and every arm joint
+    ``armature`` (kg m^2 or kg); with ``actuators``, every arm joint and finger slide
+    gets a position servo of natural frequency ``servo_frequency`` (Hz; module doc).
     """
     _check_prefix(prefix)
     if not (np.isfinite(density) and density > 0):
         raise GeometryError(f"density must be a positive number (kg/m^3), got {density!r}")
+    if not (np.isfinite(armature) and armature >= 0):
+        raise GeometryError(f"armature must be a number >= 0 (kg m^2), got {armature!r}")
+    if not (np.isfinite(servo_frequency) and servo_frequency > 0):
+        raise GeometryError(f"servo_frequency must be a number > 0 (Hz), got {servo_frequency!r}")
     spec = mujoco.MjSpec()
     spec.compiler.degree = False
     spec.modelname = robot.name
@@ -317,6 +353,7 @@ def robot_spec(
             axis=[0, 0, 1],
             range=list(j.limits),
             limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+            armature=float(armature),
         )
         fill(body, i + 1)
         bodies.append((body.name, i + 1))
@@ -361,13 +398,35 @@ def robot_spec(
         for b in range(a + 1, len(bodies)):
             if abs(bodies[a][1] - bodies[b][1]) <= 2:
                 spec.add_exclude(bodyname1=bodies[a][0], bodyname2=bodies[b][0])
+    for b in spec.worldbody.find_all(mujoco.mjtObj.mjOBJ_BODY):
+        b.gravcomp = 1.0
     spec.assets = reg.assets
+    if actuators:
+        _add_servos(spec, servo_frequency)
     return spec
+
+
+def _add_servos(spec: mujoco.MjSpec, frequency: float) -> None:
+    """A position actuator on every joint of ``spec`` (module doc), gains from the joint's
+    inertia at q = 0 in a compiled copy."""
+    m = spec.copy().compile()
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    w = 2.0 * np.pi * float(frequency)
+    for j in range(m.njnt):
+        inertia = float(M[m.jnt_dofadr[j], m.jnt_dofadr[j]])
+        name = m.joint(j).name
+        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.set_to_position(kp=inertia * w * w, kv=2.0 * SERVO_DAMPING * inertia * w)
+        act.ctrlrange = m.jnt_range[j].tolist()
+        act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
 
 
 def kinematic_model(robot: Robot, *, prefix: str = "") -> mujoco.MjModel:
     """Compiled kinematic-only model of the robot (placeholder inertias, no geometry)."""
-    return robot_spec(robot, prefix=prefix, geometry=False).compile()
+    return robot_spec(robot, prefix=prefix, geometry=False, actuators=False).compile()
 
 
 @functools.cache
