@@ -15,7 +15,7 @@ __all__ = ["SUBCOMMAND_MODULES", "main"]
 # Modules that add their own subcommands: each has ``register(sub)``, which adds its
 # parsers to the ``argparse`` subparsers ``sub`` and sets ``func`` (args -> exit code).
 # Keep their top-level imports light: ``workcell --help`` imports every one of them.
-SUBCOMMAND_MODULES: tuple[str, ...] = ("workcell.record.cli_render",)
+SUBCOMMAND_MODULES: tuple[str, ...] = ("workcell.record.cli_render", "workcell.program.cli")
 
 
 def _demo_solids(args: argparse.Namespace) -> int:
@@ -115,6 +115,18 @@ def _demo_cell(args: argparse.Namespace) -> int:
         print("(eq. 4.27: 170 deg / 0.3 rad/s = 9.89 s)")
     for name, pos in out["objects"].items():
         print(f"{name} ends at ({', '.join(f'{v:.4f}' for v in pos)}) m")
+    phys = out.get("physics")
+    if phys:
+        for robot, t in phys["tracking"].items():
+            print(
+                f"{robot} tracking: joints max {t['joint_max_rad'] * 1e3:.2f} mrad "
+                f"(rms {t['joint_rms_rad'] * 1e3:.2f}), tool max {t['tool_max_m'] * 1e3:.2f} mm"
+            )
+        for part, p in phys["parts"].items():
+            state = "resting" if p["resting"] else "still moving"
+            print(
+                f"{part} settled {p['distance_m'] * 1e3:.2f} mm from the kinematic result, {state}"
+            )
     wall = max(out["wall_time_s"], 1e-12)
     print(
         f"simulator wall clock {out['wall_time_s']:.3f} s ({out['sim_time_s'] / wall:.0f}x real "

@@ -1,0 +1,145 @@
+"""The ``shell``, ``run`` and ``serve`` subcommands (added to ``workcell`` by ``register``).
+
+Top-level imports stay light: ``workcell --help`` imports this module; the program
+package is imported when a subcommand runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from typing import Any
+
+__all__ = ["register"]
+
+_EXAMPLES = ("joints", "pick-place", "handoff")
+_MODES = ("path", "joint-by-joint", "playback")
+
+
+def _start(args: argparse.Namespace) -> Any:
+    """A function making a session as the options ask (a cell, a running simulation)."""
+    from workcell.program.cellcommands import ExampleCell, LoadCell
+    from workcell.program.session import Session
+    from workcell.program.simcommands import Simulate
+
+    def make() -> Session:
+        s = Session()
+        if args.cell:
+            s.execute(LoadCell(os.path.abspath(args.cell)))
+        elif args.example:
+            s.execute(ExampleCell(args.example))
+        if args.mode:
+            s.execute(Simulate(args.mode, args.dt))
+        return s
+
+    return make
+
+
+def _shell(args: argparse.Namespace) -> int:
+    from workcell.program.shell import run_shell
+
+    return run_shell(_start(args)(), history=args.history, echo=args.echo)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from workcell.program.interpreter import run_script
+
+    session = run_script(args.script, echo=args.echo)
+    if args.summary and session.sim is not None:
+        import json
+
+        from workcell.program.protocol import to_jsonable
+
+        print(json.dumps(to_jsonable(session.sim.summary())))
+    return 0
+
+
+def _serve(args: argparse.Namespace) -> int:
+    from workcell.program.server import Server
+
+    token = args.token or os.environ.get("WORKCELL_TOKEN") or None
+    make = _start(args)
+    make()  # a bad --cell or --mode fails here, not at each client's connection
+    server = Server(args.host, args.port, token=token, shared=args.shared, session_factory=make)
+    kind = "one shared session" if args.shared else "a session per client"
+    print(
+        f"workcell server: listening on {args.host}:{server.port} (protocol 1, {kind}"
+        f"{', token required' if token else ''}); Ctrl-C stops",
+        flush=True,
+    )
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.server_close()
+    return 0
+
+
+def _session_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--cell", metavar="CELL.json", help="start with this cell loaded")
+    g.add_argument("--example", choices=_EXAMPLES, help="start with a thesis example cell")
+    p.add_argument("--mode", choices=_MODES, help="also start simulating in this mode")
+    p.add_argument("--dt", type=float, default=0.01, metavar="SECONDS", help="sampling (0.01)")
+
+
+def register(sub: Any) -> None:
+    """Add ``shell``, ``run`` and ``serve`` to the argparse subparsers ``sub``."""
+    shell = sub.add_parser(
+        "shell",
+        help="the interactive command language (completion, history, help)",
+        description="Type commands of the workcell language; 'help' lists them. "
+        "Angles in degrees and lengths in metres unless a unit says otherwise. "
+        "Reads lines from standard input when it is not a terminal.",
+    )
+    _session_options(shell)
+    shell.add_argument("--history", metavar="FILE", help="history file (~/.workcell_history)")
+    shell.add_argument("--echo", action="store_true", help="print each line read (transcripts)")
+    shell.set_defaults(func=_shell)
+
+    run = sub.add_parser(
+        "run",
+        help="run a command-language script (.wcl)",
+        description="Run a .wcl script; the first error stops it (exit status 2).",
+    )
+    run.add_argument("script", metavar="FILE.wcl")
+    run.add_argument("--echo", action="store_true", help="print each command before its output")
+    run.add_argument(
+        "--summary", action="store_true", help="print the simulation's summary as JSON at the end"
+    )
+    run.set_defaults(func=_run)
+
+    serve = sub.add_parser(
+        "serve",
+        help="serve the remote program interface (JSON lines over TCP; docs/protocol.md)",
+        description="Serve programs over TCP. Binds 127.0.0.1 unless --host says otherwise; "
+        "any other address needs --token (or WORKCELL_TOKEN).",
+    )
+    serve.add_argument("--host", default="127.0.0.1", help="address to bind (127.0.0.1)")
+    serve.add_argument("--port", type=int, default=5260, help="port (5260; 0: any free port)")
+    serve.add_argument("--token", help="token clients must send (or set WORKCELL_TOKEN)")
+    serve.add_argument(
+        "--shared", action="store_true", help="one session for all clients (serialised)"
+    )
+    _session_options(serve)
+    serve.set_defaults(func=_serve)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one of these subcommands alone (``python -m workcell.program.cli run x.wcl``)."""
+    parser = argparse.ArgumentParser(prog="workcell")
+    register(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(argv)
+    from workcell.errors import WorkcellError
+
+    try:
+        return args.func(args)
+    except WorkcellError as exc:
+        print(f"workcell: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,121 @@
+"""Run command-language lines and ``.wcl`` scripts on a session.
+
+A script is read as a whole and every line's syntax is checked first (keywords, numbers,
+units), so a typo on line 40 is reported before line 1 moves anything. Then the lines
+run one after another, each parsed against the session as it is by then (so names
+created by earlier lines are known and checked). The first error stops the script, as
+an error stops the thesis's programs: it is raised with its own type (JointLimitError,
+ModelError, ...) and its message starts with ``FILE:LINE:``; what the earlier lines did
+stays done, and the failed command itself changed nothing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from workcell.errors import ProgramError, WorkcellError
+from workcell.program.base import Command
+from workcell.program.format import format_result
+from workcell.program.keytree import CommandSyntaxError
+from workcell.program.language import Meta, help_text, parse_line
+from workcell.program.session import Session
+
+__all__ = ["Interpreter", "QuitRequest", "check_script", "run_script"]
+
+
+class QuitRequest(Exception):  # noqa: N818 - a request, not an error
+    """Raised by the ``quit`` command to end the shell."""
+
+
+def _locate(exc: WorkcellError, where: str, line: str) -> WorkcellError:
+    if isinstance(exc, CommandSyntaxError):
+        return exc.locate(where, line)
+    exc.args = (f"{where}{exc}",)
+    return exc
+
+
+class Interpreter:
+    """Parses and runs lines on ``session``; ``out`` receives the text of each result."""
+
+    def __init__(self, session: Session, out: Callable[[str], Any] = print) -> None:
+        self.session, self.out = session, out
+
+    def run_line(self, line: str, where: str = "") -> list[Any]:
+        """Run every command on ``line``; returns their results.
+
+        Raises the command's WorkcellError (message prefixed by ``where``) at the first
+        failure; QuitRequest for ``quit``.
+        """
+        results = []
+        try:
+            parsed = parse_line(line, self.session)
+        except WorkcellError as exc:
+            raise _locate(exc, where, line) from None
+        for item in parsed:
+            if isinstance(item, Meta):
+                if item.kind == "quit":
+                    raise QuitRequest
+                self.out(help_text(item.topic))
+                results.append(None)
+                continue
+            results.append(self.run_command(item, where, line))
+        return results
+
+    def run_command(self, command: Command, where: str = "", line: str = "") -> Any:
+        """Run one command, print its result; errors get ``where`` in front."""
+        try:
+            result = self.session.execute(command)
+        except WorkcellError as exc:
+            raise _locate(exc, where, line) from None
+        text = format_result(command, result, self.session)
+        if text:
+            self.out(text)
+        return result
+
+
+def check_script(text: str, name: str = "<script>") -> int:
+    """Check the syntax of every line of a script (no names); returns the command count.
+
+    Raises the first CommandSyntaxError (or ProgramError) with ``name:line:`` in front.
+    """
+    n = 0
+    for i, line in enumerate(text.splitlines(), 1):
+        try:
+            n += len(parse_line(line))
+        except WorkcellError as exc:
+            raise _locate(exc, f"{name}:{i}: ", line) from None
+    return n
+
+
+def run_script(
+    path: str | Path,
+    session: Session | None = None,
+    *,
+    out: Callable[[str], Any] = print,
+    echo: bool = False,
+) -> Session:
+    """Run the ``.wcl`` script at ``path`` on ``session`` (default: a new session whose
+    relative file names are taken from the script's folder); returns the session.
+
+    ``echo`` prints each line before its output, as ``> line``. A ``quit`` line ends the
+    script early.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ProgramError(f"cannot read script '{p}': {exc}") from exc
+    check_script(text, str(p))
+    if session is None:
+        session = Session(base_dir=p.parent)
+    interp = Interpreter(session, out)
+    for i, line in enumerate(text.splitlines(), 1):
+        if echo and line.strip() and not line.lstrip().startswith("#"):
+            out(f"> {line}")
+        try:
+            interp.run_line(line, f"{p}:{i}: ")
+        except QuitRequest:
+            break
+    return session

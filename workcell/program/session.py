@@ -1,0 +1,148 @@
+"""The session every command runs on: a Model, and optionally a Workcell and a Simulator.
+
+A session is what one user (a shell, a script, one remote client) works on. It starts
+with an empty :class:`~workcell.Model`, or with what Python hands in; commands replace
+its parts only after they have been built without error (``cell load`` loads the file,
+then swaps the cell in), so a failed command leaves the session as it was.
+
+When a cell is present, the session's model *is* the cell's model (parts are modelled
+there). Relative file paths are taken from ``base_dir`` (a script's folder).
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from workcell.errors import ProgramError, WorkcellError
+from workcell.modeller.model import Model
+
+if TYPE_CHECKING:
+    from workcell.cell.workcell import Workcell
+    from workcell.program.base import Command
+    from workcell.sim.simulator import Simulator
+
+__all__ = ["Session"]
+
+
+class Session:
+    """A model, optionally a cell and a simulator, and the folder relative paths start from.
+
+    ``Session(sim=sim)`` takes the simulator's cell and model; ``Session(cell=cell)`` the
+    cell's model. ``lock`` serialises commands when several front ends share a session.
+    """
+
+    def __init__(
+        self,
+        model: Model | None = None,
+        *,
+        cell: Workcell | None = None,
+        sim: Simulator | None = None,
+        base_dir: str | Path = ".",
+    ) -> None:
+        if sim is not None:
+            cell = sim.cell if cell is None else cell
+            if cell is not sim.cell:
+                raise ProgramError("Session: the simulator runs another cell than the one given")
+        if cell is not None:
+            if model is not None and model is not cell.model:
+                raise ProgramError("Session: a cell brings its own model; give one or the other")
+            model = cell.model
+        self._model = Model() if model is None else model
+        self.cell = cell
+        self.sim = sim
+        self.base_dir = Path(base_dir)
+        self.lock = threading.RLock()
+
+    @property
+    def model(self) -> Model:
+        """The datamodel commands work on (the cell's model when a cell is loaded)."""
+        return self.cell.model if self.cell is not None else self._model
+
+    def set_model(self, model: Model) -> None:
+        """Replace the model; refused while a cell is loaded (its parts live in its model)."""
+        if self.cell is not None:
+            raise ProgramError(
+                f"cell '{self.cell.name}' is loaded and its parts live in its model; "
+                "load a cell file instead (cell load FILE), or start a new session"
+            )
+        self._model = model
+
+    def set_cell(self, cell: Workcell | None) -> None:
+        """Replace the cell (and drop the simulator of the old one)."""
+        self.cell = cell
+        self.sim = None
+
+    def require_cell(self) -> Workcell:
+        """The cell; ProgramError when there is none yet."""
+        if self.cell is None:
+            raise ProgramError(
+                "no cell yet: start one with 'cell new NAME', 'cell load FILE' or "
+                "'cell example joints|pick-place|handoff'"
+            )
+        return self.cell
+
+    def require_sim(self) -> Simulator:
+        """The simulator; ProgramError when there is none yet."""
+        if self.sim is None:
+            hint = "" if self.cell is not None else " after loading a cell"
+            raise ProgramError(
+                f"no simulation running: start one with 'simulate [MODE] [dt SECONDS]'{hint}"
+            )
+        return self.sim
+
+    def path(self, path: str) -> Path:
+        """``path`` taken from ``base_dir`` when relative (``~`` expanded)."""
+        p = Path(path).expanduser()
+        return p if p.is_absolute() else self.base_dir / p
+
+    def execute(self, command: Command) -> Any:
+        """Run one command under the session's lock and return its result."""
+        with self.lock:
+            return command.execute(self)
+
+    # ------------------------------------------------------------------ names (completion)
+    def names(self, kind: str) -> list[str]:
+        """Known names of ``kind`` for completion and checks.
+
+        Kinds: a datamodel level, ``entity`` (every level), ``owner`` (blocks, objects,
+        scenes), ``robot``, ``part`` (static and movable), ``movable``, ``cellitem``.
+        """
+        m = self.model
+        if kind in ("surface", "block", "object", "scene"):
+            return list(m.list(kind))
+        if kind == "entity":
+            return [n for lv in ("surface", "block", "object", "scene") for n in m.list(lv)]
+        if kind == "owner":
+            return [n for lv in ("block", "object", "scene") for n in m.list(lv)]
+        cell = self.cell
+        if cell is None:
+            return []
+        if kind == "robot":
+            return list(self.sim.robots) if self.sim is not None else list(cell.robots)
+        if kind == "part":
+            return [*cell.static_parts, *cell.movable_parts]
+        if kind == "movable":
+            return list(cell.movable_parts)
+        if kind == "cellitem":
+            return cell.names()
+        return []
+
+    def relation_names(self, owner: str | tuple[str, str]) -> list[str]:
+        """Relation names of ``owner`` (empty when it is unknown)."""
+        try:
+            return [r.name for r in self.model.relations(owner)]
+        except WorkcellError:  # an unknown or ambiguous owner: nothing to complete
+            return []
+
+    def joint_kinds(self, robot: str) -> list[bool] | None:
+        """For each joint of ``robot``, True when revolute (None when unknown)."""
+        if self.cell is None or robot not in self.cell.robots:
+            return None
+        return [bool(x) for x in self.cell.robots[robot].robot.revolute]
+
+    def __repr__(self) -> str:
+        cell = f"cell '{self.cell.name}'" if self.cell is not None else "no cell"
+        sim = f"simulator {self.sim.mode}" if self.sim is not None else "no simulator"
+        return f"Session({self.model!r}, {cell}, {sim})"

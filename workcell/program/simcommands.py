@@ -1,0 +1,302 @@
+"""The command vocabulary, simulation part (thesis §4.4-4.6).
+
+``simulate`` starts a :class:`~workcell.sim.Simulator` on the session's cell (see
+:mod:`workcell.program.cellcommands`). Simulation commands carry the
+Simulator's method names and SI arguments (rad, m, s; a pose is a 4x4 world pose of the
+robot's tool, or a :class:`~workcell.program.targets.Target`) and call that method; the
+Simulator validates before it changes anything, so a failed command changes nothing.
+Commands for Simulator methods that this build of the simulator does not have yet raise
+ProgramError saying so.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from workcell.errors import ProgramError
+from workcell.program import args as a
+from workcell.program.args import arg
+from workcell.program.base import Command
+from workcell.program.targets import Target, target
+
+if TYPE_CHECKING:
+    from workcell.program.session import Session
+
+__all__ = [
+    "MODES",
+    "Clearance",
+    "CloseGripper",
+    "Events",
+    "Frames",
+    "Held",
+    "Joints",
+    "MoveEndEffector",
+    "MoveJointsAbsolute",
+    "MoveJointsRelative",
+    "MoveStraightLine",
+    "OpenGripper",
+    "PartPositions",
+    "Play",
+    "Robots",
+    "SetMode",
+    "SetSpeed",
+    "SimTime",
+    "Simulate",
+    "StopSimulation",
+    "Summary",
+    "ToolPose",
+    "Wait",
+]
+
+MODES = ("path", "joint-by-joint", "playback")
+_name = a.name
+
+
+def _call(session: Session, method: str, *args: Any, **kw: Any) -> Any:
+    """Call the session simulator's ``method``; ProgramError when it has none."""
+    sim = session.require_sim()
+    fn = getattr(sim, method, None)
+    if fn is None:
+        raise ProgramError(f"{method}: this simulator does not provide {method} yet")
+    return fn(*args, **kw)
+
+
+# ---------------------------------------------------------------- simulation
+@dataclass(frozen=True)
+class Simulate(Command, wire="simulate"):
+    """Start simulating the cell in ``mode`` with sampling interval ``dt`` (s); replaces
+    any running simulation (its clock and timeline start anew)."""
+
+    mode: str = arg(a.choice(*MODES), "path")
+    dt: float = arg(a.number, 0.01, "s")
+    realtime: bool = arg(a.boolean, False)
+
+    def execute(self, session: Session) -> str:
+        from workcell.sim.simulator import Simulator
+
+        cell = session.require_cell()
+        session.sim = Simulator(cell, mode=self.mode, dt=self.dt, realtime=self.realtime)
+        return f"simulating cell '{cell.name}': {self.mode} mode, dt {self.dt:g} s"
+
+
+@dataclass(frozen=True)
+class StopSimulation(Command, wire="stop_simulation"):
+    """End the simulation (the cell stays and can be edited again)."""
+
+    def execute(self, session: Session) -> None:
+        session.require_sim()
+        session.sim = None
+
+
+@dataclass(frozen=True)
+class SetMode(Command, wire="set_mode"):
+    """Switch the simulation mode: path, joint-by-joint or playback."""
+
+    mode: str = arg(a.choice(*MODES))
+
+    def execute(self, session: Session) -> None:
+        _call(session, "set_mode", self.mode)
+
+
+@dataclass(frozen=True)
+class SetSpeed(Command, wire="set_speed"):
+    """Set a robot's speed (rad/s): the speed of the joint that moves most."""
+
+    robot: str = arg(a.name)
+    speed: float = arg(a.number, doc="rad/s")
+
+    def execute(self, session: Session) -> None:
+        _call(session, "set_speed", self.robot, self.speed)
+
+
+@dataclass(frozen=True)
+class MoveJointsAbsolute(Command, wire="move_joints_absolute"):
+    """Move a robot's joints to ``q`` (rad/m)."""
+
+    robot: str = arg(a.name)
+    q: tuple[float, ...] = arg(a.vector, doc="rad/m")
+
+    def execute(self, session: Session) -> None:
+        _call(session, "move_joints_absolute", self.robot, np.array(self.q))
+
+
+@dataclass(frozen=True)
+class MoveJointsRelative(Command, wire="move_joints_relative"):
+    """Move a robot's joints by ``dq`` (rad/m)."""
+
+    robot: str = arg(a.name)
+    dq: tuple[float, ...] = arg(a.vector, doc="rad/m")
+
+    def execute(self, session: Session) -> None:
+        _call(session, "move_joints_relative", self.robot, np.array(self.dq))
+
+
+@dataclass(frozen=True)
+class MoveEndEffector(Command, wire="move_end_effector"):
+    """Move the tool to pose ``T`` (IK, then linear in joints); ``config`` picks the Puma
+    solution (three letters l|r, u|d, n|f; default: the nearest)."""
+
+    robot: str = arg(a.name)
+    T: Target = arg(target)  # noqa: RUF009 - arg() returns a dataclasses.field
+    config: str | None = arg(a.optional(a.name), None)
+
+    def execute(self, session: Session) -> None:
+        T = self.T.resolve(session, self.robot)
+        _call(session, "move_end_effector", self.robot, T, config=self.config)
+
+
+@dataclass(frozen=True)
+class MoveStraightLine(Command, wire="move_straight_line"):
+    """Move the tool along a straight line to ``T``, samples ``step`` (m) apart."""
+
+    robot: str = arg(a.name)
+    T: Target = arg(target)  # noqa: RUF009 - arg() returns a dataclasses.field
+    step: float = arg(a.number, 0.005, "m")
+
+    def execute(self, session: Session) -> None:
+        T = self.T.resolve(session, self.robot)
+        _call(session, "move_straight_line", self.robot, T, step=self.step)
+
+
+@dataclass(frozen=True)
+class CloseGripper(Command, wire="close_gripper"):
+    """Close the gripper: grasp the first movable part within ``max_distance`` (m) of the
+    tool with a box axis within ``max_angle`` (rad) of the tool's z axis; returns its name."""
+
+    robot: str = arg(a.name)
+    max_distance: float = arg(a.number, 0.02, "m")
+    max_angle: float = arg(a.number, math.radians(10), "rad")
+
+    def execute(self, session: Session) -> Any:
+        return _call(
+            session,
+            "close_gripper",
+            self.robot,
+            max_distance=self.max_distance,
+            max_angle=self.max_angle,
+        )
+
+
+@dataclass(frozen=True)
+class OpenGripper(Command, wire="open_gripper"):
+    """Open the gripper; returns the part released (or null)."""
+
+    robot: str = arg(a.name)
+
+    def execute(self, session: Session) -> Any:
+        return _call(session, "open_gripper", self.robot)
+
+
+@dataclass(frozen=True)
+class Wait(Command, wire="wait"):
+    """Let ``seconds`` of simulated time pass."""
+
+    seconds: float = arg(a.number, doc="s")
+
+    def execute(self, session: Session) -> None:
+        _call(session, "wait", self.seconds)
+
+
+@dataclass(frozen=True)
+class Play(Command, wire="play"):
+    """Replay the stored frames (playback mode); ``realtime`` null: the simulator's setting.
+    Returns the number of frames shown."""
+
+    realtime: bool | None = arg(a.optional(a.boolean), None)
+
+    def execute(self, session: Session) -> int:
+        return _call(session, "play", self.realtime)
+
+
+# ---------------------------------------------------------------- read-back
+@dataclass(frozen=True)
+class Joints(Command, wire="joints"):
+    """A robot's joint values now (rad/m)."""
+
+    robot: str = arg(a.name)
+
+    def execute(self, session: Session) -> np.ndarray:
+        return _call(session, "joints", self.robot)
+
+
+@dataclass(frozen=True)
+class ToolPose(Command, wire="tool_pose"):
+    """A robot's tool pose now (4x4 world, m)."""
+
+    robot: str = arg(a.name)
+
+    def execute(self, session: Session) -> np.ndarray:
+        return _call(session, "tool_pose", self.robot)
+
+
+@dataclass(frozen=True)
+class Held(Command, wire="held"):
+    """The part a robot holds (or null)."""
+
+    robot: str = arg(a.name)
+
+    def execute(self, session: Session) -> Any:
+        return _call(session, "held", self.robot)
+
+
+@dataclass(frozen=True)
+class Clearance(Command, wire="clearance"):
+    """The distance (m) between two things of the cell (parts, robots)."""
+
+    a: str = arg(_name)  # (the field ``a`` hides the module alias ``a`` in this body)
+    b: str = arg(_name)
+
+    def execute(self, session: Session) -> float:
+        return _call(session, "clearance", self.a, self.b)
+
+
+@dataclass(frozen=True)
+class Robots(Command, wire="robots"):
+    """The cell's robot names."""
+
+    def execute(self, session: Session) -> tuple[str, ...]:
+        return session.require_sim().robots
+
+
+@dataclass(frozen=True)
+class Frames(Command, wire="frames"):
+    """Number of frames on the timeline (frame 0 is the initial state)."""
+
+    def execute(self, session: Session) -> int:
+        return session.require_sim().frames
+
+
+@dataclass(frozen=True)
+class SimTime(Command, wire="sim_time"):
+    """The simulated clock (s)."""
+
+    def execute(self, session: Session) -> float:
+        return session.require_sim().sim_time
+
+
+@dataclass(frozen=True)
+class Events(Command, wire="events"):
+    """The timeline's events, each {t (s), robot, kind, detail}."""
+
+    def execute(self, session: Session) -> list[dict[str, Any]]:
+        return [e.to_dict() for e in session.require_sim().events]
+
+
+@dataclass(frozen=True)
+class Summary(Command, wire="summary"):
+    """sim_time_s, wall_time_s, frames, events, collisions, objects (part positions, m)."""
+
+    def execute(self, session: Session) -> dict[str, Any]:
+        return _call(session, "summary")
+
+
+@dataclass(frozen=True)
+class PartPositions(Command, wire="part_positions"):
+    """World position (m) of each movable part, by name."""
+
+    def execute(self, session: Session) -> dict[str, list[float]]:
+        return _call(session, "part_positions")
