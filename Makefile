@@ -23,6 +23,8 @@ bench: $(STAMP)
 	$(BIN)/python scripts/bench_modeller.py
 	$(BIN)/python scripts/bench_kinematics.py
 	$(BIN)/python scripts/bench_sim.py
+	$(BIN)/python scripts/bench_record.py
+	$(BIN)/python scripts/bench_server.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -147,3 +147,22 @@ def test_demo_solids_json(tmp_path, capsys):
         if r["exact_volume"] is not None:
             assert r["volume"] == pytest.approx(r["exact_volume"], rel=1e-12), r["name"]
     assert out_file.exists()
+
+
+def test_readme_shell_transcript_is_what_the_shell_prints():
+    import subprocess
+    import sys
+
+    text = (ROOT / "README.md").read_text()
+    start = text.index("```\nworkcell> ") + len("```\n")
+    block = text[start : text.index("```", start)]
+    lines = [ln[len("workcell> ") :] for ln in block.splitlines() if ln.startswith("workcell> ")]
+    run = subprocess.run(
+        [sys.executable, "-m", "workcell.cli", "shell", "--echo"],
+        input="\n".join(lines) + "\n",
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        timeout=120,
+    )
+    assert run.stdout.strip() == block.strip()

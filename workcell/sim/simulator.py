@@ -389,10 +389,13 @@ class Simulator(CartesianCommands, GripperCommands):
             raise ProgramError(
                 f"{command} '{name}': {what} must be {n} numbers, got {v!r}"
             ) from exc
-        if a.shape != (n,) or not np.all(np.isfinite(a)):
+        if a.shape != (n,):
+            got = f"{a.size} value(s)" if a.ndim == 1 else f"an array of shape {a.shape}"
             raise ProgramError(
-                f"{command} '{name}': {what} must be {n} finite numbers (rad/m), got {v!r}"
+                f"{command} '{name}': {what} must be {n} numbers (rad/m, one per joint), got {got}"
             )
+        if not np.all(np.isfinite(a)):
+            raise ProgramError(f"{command} '{name}': {what} must be finite, got {a.tolist()}")
         return a
 
     def _plan(self, name: str, q0: Array, target: Array) -> tuple[Array, Rows]:
