@@ -39,9 +39,9 @@ batches of ``chunk_frames`` frames with ``send_columns``, so memory stays bounde
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
-import tempfile
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -57,6 +57,7 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from workcell.errors import RecordError
+from workcell.files import atomic_path
 from workcell.record.rr_scene import (
     EVENTS,
     GRIPPERS,
@@ -339,18 +340,16 @@ def record(
         )
     if not (isinstance(port, int) and 0 < port < 65536):
         raise RecordError(f"port must be an integer in 1..65535, got {port!r}")
-    target = tmp = None
-    if path is not None:
-        target = Path(path)
+    target = None if path is None else Path(path)
+    if target is not None:
         if target.suffix != ".rrd":
             raise RecordError(f"a recording file must end in .rrd, got '{target}'")
         if not target.parent.is_dir():
             raise RecordError(f"cannot write '{target}': folder '{target.parent}' does not exist")
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-        os.close(fd)
-    rec = rr.RecordingStream(application_id, recording_id=recording_id)
-    rec.set_log_time_enabled(False)
-    try:
+    with contextlib.ExitStack() as stack:
+        tmp = None if target is None else stack.enter_context(atomic_path(target))
+        rec = rr.RecordingStream(application_id, recording_id=recording_id)
+        rec.set_log_time_enabled(False)
         try:
             bp = default_blueprint(sim.robots, grippers=bool(sim.compiled.gripper_bodies))
             sinks: list[rr.FileSink | rr.GrpcSink] = [rr.FileSink(tmp)] if tmp is not None else []
@@ -366,14 +365,5 @@ def record(
             raise RecordError(f"streaming to the rerun viewer at {url} failed: {exc}") from exc
         finally:
             rec.disconnect()
-        if tmp is not None and target is not None:
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)
-            os.replace(tmp, target)
-            tmp = None
-    finally:
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)
     size = target.stat().st_size if target is not None else None
     return RecordStats(stats.frames, stats.events, stats.moving_bodies, stats.seconds, target, size)

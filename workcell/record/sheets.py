@@ -11,12 +11,10 @@ are in pixels, times in seconds of simulated time. These names are also importab
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
 import sys
-import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -26,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workcell.errors import RenderError
+from workcell.files import atomic_path
 from workcell.record.render import CellRenderer, _camera_for, _frames_qpos, save_png
 
 if TYPE_CHECKING:
@@ -149,25 +148,6 @@ def contact_sheet(
 
 
 # ---------------------------------------------------------------------- video
-@contextlib.contextmanager
-def _atomic_target(path: Path) -> Iterator[str]:
-    """A temp file beside ``path`` that replaces it (fsync, usual mode) when the block succeeds."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        yield tmp
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 def video_frames(sim: Simulator, fps: float) -> NDArray[np.intp]:
     """Timeline frame shown at each video frame: samples every 1/fps s of simulated time
     from 0 to the end (the last sample is the final frame), ceil(T fps) + 1 of them."""
@@ -209,7 +189,7 @@ def save_mp4(
     p = Path(path)
     with (
         CellRenderer(sim.model, width, height) as r,
-        _atomic_target(p) as tmp,
+        atomic_path(p, suffix=p.suffix) as tmp,
         av.open(tmp, mode="w", format="mp4") as out,
     ):
         stream = out.add_stream("libx264", rate=Fraction(fps).limit_denominator(1000))
