@@ -16,6 +16,7 @@ import itertools
 import numpy as np
 
 from workcell.cell.workcell import Workcell
+from workcell.examples import run_program
 from workcell.sim.simulator import Simulator
 
 __all__ = [
@@ -54,11 +55,7 @@ def program(sim: Simulator) -> None:
 
 def run(mode: str = "path", dt: float = 0.01, *, realtime: bool = False) -> Simulator:
     """Build the cell, run the program in ``mode`` (playback: computed, then replayed)."""
-    sim = Simulator(build(), mode=mode, dt=dt, realtime=realtime)
-    program(sim)
-    if mode == "playback":
-        sim.play()
-    return sim
+    return run_program(build(), program, mode, dt, realtime=realtime)
 
 
 def expected_sim_time(speed: float = SPEED) -> float:

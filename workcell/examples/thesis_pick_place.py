@@ -14,6 +14,7 @@ import numpy as np
 
 from workcell import solids
 from workcell.cell.workcell import Workcell
+from workcell.examples import run_program
 from workcell.sim.grasp import tool_down
 from workcell.sim.simulator import Simulator
 from workcell.sim.tasks import pick, place
@@ -95,8 +96,4 @@ def program(sim: Simulator) -> None:
 
 def run(mode: str = "path", dt: float = 0.01, **options: object) -> Simulator:
     """Build the cell, run the program in ``mode`` (playback: computed, then replayed)."""
-    sim = Simulator(build(), mode=mode, dt=dt, **options)
-    program(sim)
-    if mode == "playback":
-        sim.play()
-    return sim
+    return run_program(build(), program, mode, dt, **options)
