@@ -10,6 +10,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from workcell.examples import CELL_HELP, CELLS
+
 __all__ = ["SUBCOMMAND_MODULES", "main"]
 
 # Modules that add their own subcommands: each has ``register(sub)``, which adds its
@@ -53,11 +55,6 @@ def _demo_solids(args: argparse.Namespace) -> int:
     return 0 if same and all(r.valid for r in rows) else 1
 
 
-EXAMPLES = {
-    "joints": "workcell.examples.thesis_joints",
-    "pick-place": "workcell.examples.thesis_pick_place",
-    "handoff": "workcell.examples.thesis_handoff",
-}
 TITLES = {
     "joints": "the thesis's example 1 (ch. 5): one Puma 260 moved in joint space",
     "pick-place": "the thesis's example 2 (ch. 5): pick and place with one Puma 260",
@@ -66,11 +63,10 @@ TITLES = {
 
 
 def _demo_cell(args: argparse.Namespace) -> int:
-    import importlib
-
     from workcell.cell import export_cell
+    from workcell.examples import example as example_module
 
-    example = importlib.import_module(EXAMPLES[args.example])
+    example = example_module(args.example)
     t0 = time.perf_counter()
     sim = example.run(args.mode, args.dt)
     result = sim
@@ -157,10 +153,11 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def _export(args: argparse.Namespace) -> int:
-    from workcell.cell import Workcell, export_cell
+    from workcell.cell import export_cell
+    from workcell.examples import load_cell
 
     t0 = time.perf_counter()
-    cell = Workcell.load(args.cell)
+    cell = load_cell(args.cell)
     path = export_cell(cell, args.out)
     print(f"wrote {path} ({time.perf_counter() - t0:.2f} s)")
     return 0
@@ -175,7 +172,7 @@ def main(argv: list[str] | None = None) -> int:
     demo = sub.add_parser("demo", help="run a built-in example")
     demo.add_argument(
         "example",
-        choices=["solids", *EXAMPLES],
+        choices=["solids", *CELLS],
         help="solids: the thesis's example solids (ch. 2-3); joints, pick-place, handoff: "
         "its three example workcells (ch. 5)",
     )
@@ -207,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
     export = sub.add_parser(
         "export", help="write a cell (JSON) as one MJCF file plus its STL meshes"
     )
-    export.add_argument("cell", metavar="CELL.json", help="a cell saved by Workcell.save")
+    export.add_argument("cell", metavar="CELL", help=CELL_HELP)
     export.add_argument("--out", metavar="DIR", required=True, help="output folder")
     export.set_defaults(func=_export)
     for module in SUBCOMMAND_MODULES:

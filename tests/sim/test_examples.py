@@ -138,3 +138,22 @@ def test_events_point_at_the_frame_that_shows_them(mode):
     assert np.allclose(Q[moves[1].frame], a, atol=1e-12)
     assert np.allclose(Q[moves[2].frame], b, atol=1e-12)
     assert np.allclose(Q[moves[0].frame], start + np.radians(thesis_joints.RELATIVE_DEG))
+
+
+def test_example_cells_load_by_name_for_every_cli_command(tmp_path, capsys):
+    from workcell import ProgramError
+    from workcell.cli import main
+    from workcell.examples import CELLS, example, load_cell
+
+    assert set(CELLS) == {"joints", "pick-place", "handoff"}
+    cell = load_cell("handoff")
+    assert set(cell.robots) == {ho.GIVER, ho.RECEIVER}
+    cell.save(tmp_path / "h.json")
+    assert load_cell(tmp_path / "h.json") == cell
+    assert main(["info", "pick-place", "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert [r["name"] for r in info["robots"]] == [pp.ROBOT]
+    assert main(["export", "handoff", "--out", str(tmp_path / "x")]) == 0
+    assert (tmp_path / "x" / "thesis_handoff.xml").exists()
+    with pytest.raises(ProgramError, match="examples: joints, pick-place, handoff"):
+        example("welding")

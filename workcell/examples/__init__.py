@@ -6,14 +6,44 @@ and ``run(mode, dt, **options)`` (both, through :func:`run_program`).
 
 from __future__ import annotations
 
+import importlib
+import os
 from collections.abc import Callable
+from types import ModuleType
 from typing import TYPE_CHECKING
+
+from workcell.errors import ProgramError
 
 if TYPE_CHECKING:
     from workcell.cell.workcell import Workcell
     from workcell.sim.simulator import Simulator
 
-__all__ = ["run_program"]
+__all__ = ["CELLS", "CELL_HELP", "example", "load_cell", "run_program"]
+
+# the thesis's example workcells (ch. 5): name -> module with build(), program(), run()
+CELLS = {
+    "joints": "workcell.examples.thesis_joints",
+    "pick-place": "workcell.examples.thesis_pick_place",
+    "handoff": "workcell.examples.thesis_handoff",
+}
+
+CELL_HELP = f"a cell saved by Workcell.save (.json), or an example cell: {', '.join(CELLS)}"
+
+
+def example(name: str) -> ModuleType:
+    """The module of example workcell ``name`` (one of :data:`CELLS`)."""
+    if name not in CELLS:
+        raise ProgramError(f"no example cell {name!r}; examples: {', '.join(CELLS)}")
+    return importlib.import_module(CELLS[name])
+
+
+def load_cell(spec: str | os.PathLike) -> Workcell:
+    """A cell from a saved JSON file, or an example cell by name ("handoff", ...)."""
+    from workcell.cell.workcell import Workcell
+
+    if isinstance(spec, str) and spec in CELLS:
+        return example(spec).build()
+    return Workcell.load(spec)
 
 
 def run_program(

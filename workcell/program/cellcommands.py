@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from workcell.errors import ModelError, ProgramError
+from workcell.examples import CELLS
 from workcell.program import args as a
 from workcell.program.args import arg
 from workcell.program.base import Command
@@ -37,12 +38,7 @@ __all__ = [
     "ShowCell",
 ]
 
-# the thesis's example cells (ch. 5): name -> module with build() -> Workcell
-EXAMPLES = {
-    "joints": "workcell.examples.thesis_joints",
-    "pick-place": "workcell.examples.thesis_pick_place",
-    "handoff": "workcell.examples.thesis_handoff",
-}
+EXAMPLES = CELLS  # the thesis's example cells (ch. 5): name -> module with build()
 _opt_matrix = a.optional(a.matrix)
 
 

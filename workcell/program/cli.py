@@ -11,9 +11,10 @@ import os
 import sys
 from typing import Any
 
+from workcell.examples import CELLS
+
 __all__ = ["register"]
 
-_EXAMPLES = ("joints", "pick-place", "handoff")
 _MODES = ("path", "joint-by-joint", "playback")
 
 
@@ -80,7 +81,7 @@ def _serve(args: argparse.Namespace) -> int:
 def _session_options(p: argparse.ArgumentParser) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--cell", metavar="CELL.json", help="start with this cell loaded")
-    g.add_argument("--example", choices=_EXAMPLES, help="start with a thesis example cell")
+    g.add_argument("--example", choices=tuple(CELLS), help="start with a thesis example cell")
     p.add_argument("--mode", choices=_MODES, help="also start simulating in this mode")
     p.add_argument("--dt", type=float, default=0.01, metavar="SECONDS", help="sampling (0.01)")
 

@@ -15,6 +15,8 @@ import math
 import time
 from typing import Any
 
+from workcell.examples import CELL_HELP, load_cell
+
 __all__ = ["GRASP_YAWS_DEG", "cell_info", "format_info", "reachability", "register"]
 
 GRASP_YAWS_DEG = (0.0, 45.0, 90.0, 135.0)  # yaws of the top-down grasps tried (deg)
@@ -28,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Render a saved cell in its initial state with MuJoCo's offscreen "
         "renderer (MUJOCO_GL=egl, else osmesa).",
     )
-    render.add_argument("cell", metavar="CELL.json", help="a cell saved by Workcell.save")
+    render.add_argument("cell", metavar="CELL", help=CELL_HELP)
     render.add_argument("--out", metavar="FILE.png", required=True, help="the PNG to write")
     render.add_argument(
         "--camera", metavar="NAME", help="a camera of the cell (default: an overview)"
@@ -43,17 +45,16 @@ def register(sub: argparse._SubParsersAction) -> None:
         "for each movable part and robot whether a top-down grasp over the part's "
         "centroid is reachable (kinematics only: joint limits, no collision check).",
     )
-    info.add_argument("cell", metavar="CELL.json", help="a cell saved by Workcell.save")
+    info.add_argument("cell", metavar="CELL", help=CELL_HELP)
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.set_defaults(func=_info)
 
 
 def _render(args: argparse.Namespace) -> int:
-    from workcell.cell import Workcell
     from workcell.record.render import gl_backend, render_cell, save_png
 
     t0 = time.perf_counter()
-    cell = Workcell.load(args.cell)
+    cell = load_cell(args.cell)
     image = render_cell(cell, camera=args.camera, width=args.width, height=args.height)
     path = save_png(image, args.out)
     view = f"camera '{args.camera}'" if args.camera else "overview camera"
@@ -65,9 +66,7 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
-    from workcell.cell import Workcell
-
-    info = cell_info(Workcell.load(args.cell))
+    info = cell_info(load_cell(args.cell))
     print(json.dumps(info) if args.json else format_info(info))
     return 0
 
