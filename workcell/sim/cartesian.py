@@ -232,7 +232,7 @@ class CartesianCommands:
         """Path-mode frames through joint waypoints Qw (k, dof), linear between them."""
         speed, dt = self._speed[name], self.dt
         times, rows = [np.empty(0)], [np.empty((0, len(q0)))]
-        clock, prev = self.sim_time, q0
+        clock, prev = self._start_time(name), q0
         for q in Qw:
             d = q - prev
             big = float(np.max(np.abs(d)))

@@ -90,6 +90,7 @@ class GripperCommands:
         GraspError naming the nearest candidate and the test it failed.
         """
         name = self._robot(robot)
+        self._not_in_block("close_gripper")
         self._gripper_id(name, "close_gripper")
         for what, v in (("max_distance", max_distance), ("max_angle", max_angle)):
             if not (is_finite_number(v) and v >= 0):
@@ -144,6 +145,7 @@ class GripperCommands:
         that robot carries it from now on.
         """
         name = self._robot(robot)
+        self._not_in_block("open_gripper")
         self._gripper_id(name, "open_gripper")
         hold = self._holds.get(name)
         with self._transaction():

@@ -59,6 +59,10 @@ Collisions (``check_collisions``, default on): after each frame's ``mj_kinematic
 ``stop_on_collision`` raises :class:`CollisionError` at the first one (the command is
 undone). :meth:`Simulator.clearance` gives the minimum distance between two named things.
 
+Several robots at once (beyond the thesis; :mod:`workcell.sim.concurrent`): inside
+``with sim.concurrently():`` each robot's motion commands start together and the frames
+are merged, so the clock advances by the longest robot's time.
+
 Profiles (``profile``; :mod:`workcell.sim.profiles`): the thesis's constant speed
 ("linear"), or, beyond the thesis, "trapezoid" (``acceleration`` rad/s^2) or "quintic",
 for joint moves and ``move_end_effector``; the simulated clock then runs by the
@@ -91,6 +95,7 @@ from workcell.errors import (
 )
 from workcell.sim import profiles
 from workcell.sim.cartesian import CartesianCommands
+from workcell.sim.concurrent import ConcurrentCommands
 from workcell.sim.contacts import (
     DEFAULT_TOLERANCE,
     ContactMonitor,
@@ -111,7 +116,7 @@ Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, 
 _EMIT_CHUNK = 16384  # frames built and emitted at a time
 
 
-class Simulator(CartesianCommands, GripperCommands):
+class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
     """Kinematic simulator of a workcell (see the module doc).
 
     ``mode``: "path", "joint-by-joint" or "playback"; ``dt`` the sampling interval dT
@@ -322,6 +327,7 @@ class Simulator(CartesianCommands, GripperCommands):
         """Switch the simulation mode for the commands that follow."""
         if mode not in MODES:
             raise ProgramError(f"unknown simulation mode {mode!r}; valid: {', '.join(MODES)}")
+        self._not_in_block("set_mode")
         self.mode = mode
         self.timeline.add_event(self.sim_time, None, "mode", f"mode {mode}")
 
@@ -329,6 +335,7 @@ class Simulator(CartesianCommands, GripperCommands):
         """Let ``seconds`` of simulated time pass with nothing moving (one frame at the end)."""
         if not (is_finite_number(seconds) and seconds >= 0):
             raise ProgramError(f"wait: seconds must be a finite number >= 0, got {seconds!r}")
+        self._not_in_block("wait")
         s = float(seconds)
         with self._transaction():
             if s > 0:
@@ -419,10 +426,10 @@ class Simulator(CartesianCommands, GripperCommands):
                     Q[last - lo] = target
                 return Q
 
-            return self.sim_time + t, rows
+            return self._start_time(name) + t, rows
         times, rows = [], []
         q = q0.copy()
-        clock = self.sim_time
+        clock = self._start_time(name)
         fastest = int(np.argmax(np.abs(delta)))
         for i in np.flatnonzero(delta):
             di = abs(float(delta[i]))
@@ -454,6 +461,9 @@ class Simulator(CartesianCommands, GripperCommands):
         """Emit a robot's planned frames (carrying what it holds) and log the move event.
 
         Frames are built and emitted ``_EMIT_CHUNK`` at a time (bounded memory)."""
+        if self._block is not None:  # inside concurrently(): run when the block ends
+            self._defer(name, times, Qr, command, detail)
+            return
         k = len(times)
         carried = self._carried(name) if k else []
         rows = Qr if callable(Qr) else (lambda lo, hi: Qr[lo:hi])
