@@ -80,7 +80,9 @@ def _demo_cell(args: argparse.Namespace) -> int:
     if args.save:
         from workcell.record import record
 
-        stats = record(result, args.save, progress=None if args.json else True)
+        stats = record(
+            result, args.save, progress=None if args.json else True, images_fps=args.images
+        )
         out["rrd"] = str(stats.path)
         out["rrd_bytes"] = stats.bytes
     if args.render:
@@ -191,6 +193,12 @@ def main(argv: list[str] | None = None) -> int:
         "--save",
         metavar="FILE",
         help="solids: save the model (JSON) to FILE; cells: record the run to FILE.rrd",
+    )
+    demo.add_argument(
+        "--images",
+        type=float,
+        metavar="FPS",
+        help="with --save: also put pictures in the recording, FPS per simulated second",
     )
     demo.add_argument(
         "--render",

@@ -43,3 +43,33 @@ def test_demo_handoff_writes_a_recording_and_a_picture(tmp_path, capsys):
         assert 5 * 400 <= im.width < 5 * 400 + 100  # five tiles and their margins
         assert im.height > 300
         assert np.asarray(im.convert("L")).std() > 10  # not a blank picture
+
+
+def test_pictures_inside_the_recording(tmp_path):
+    import io
+
+    from workcell.examples import thesis_joints
+    from workcell.record import record
+    from workcell.record.rr_images import image_entity
+    from workcell.record.sheets import video_frames
+
+    sim = thesis_joints.run("path", 0.05)
+    path = tmp_path / "pictures.rrd"
+    record(sim, path, images_fps=2.0, image_size=(160, 120))
+    entity = image_entity(None)
+    frames, blobs = [], []
+    for chunk in RrdReader(path).store().stream().filter(content=entity).to_chunks():
+        rb = chunk.to_record_batch()
+        if chunk.entity_path != entity or "frame" not in rb.schema.names:
+            continue
+        frames += rb.column("frame").to_pylist()
+        col = next(n for n in rb.schema.names if n.endswith("blob"))
+        blobs += rb.column(col).to_pylist()
+    # one picture per distinct frame of a 2 fps video of the run (9.89 s: 21 samples)
+    expected = np.unique(video_frames(sim, 2.0))
+    assert sorted(frames) == expected.tolist()
+    assert len(expected) == 21
+    first = blobs[0][0] if isinstance(blobs[0], list) else blobs[0]
+    with Image.open(io.BytesIO(bytes(first))) as im:
+        assert im.size == (160, 120)
+        assert im.format == "JPEG"

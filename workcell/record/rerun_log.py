@@ -319,6 +319,9 @@ def record(
     progress: bool | None = None,
     application_id: str = "workcell",
     recording_id: str | None = None,
+    images_fps: float | None = None,
+    image_camera: str | None = None,
+    image_size: tuple[int, int] = (640, 480),
 ) -> RecordStats:
     """Record a finished simulator's whole timeline with the default blueprint.
 
@@ -328,8 +331,11 @@ def record(
     to a running viewer's gRPC URL (e.g. ``"rerun+http://127.0.0.1:9876/proxy"``).
     Times: simulated and wall clocks as ns durations, ``frame`` as a sequence; lengths in
     metres, joint angles in degrees. ``chunk_frames`` and ``progress``: see
-    :func:`log_timeline`. ``recording_id``: default a fresh UUID. Returns a
-    :class:`RecordStats` (``path`` and ``bytes`` set when a file was written).
+    :func:`log_timeline`. ``recording_id``: default a fresh UUID. ``images_fps``: also
+    render the run every 1/images_fps simulated seconds from ``image_camera`` (default:
+    the overview) at ``image_size`` (width, height pixels) and log the pictures (see
+    :mod:`workcell.record.rr_images`). Returns a :class:`RecordStats` (``path`` and
+    ``bytes`` set when a file was written).
     """
     if path is None and not spawn and connect is None:
         raise RecordError("record: nowhere to record to; give a path, spawn=True or connect=URL")
@@ -338,6 +344,10 @@ def record(
             f"connect must be a viewer URL such as 'rerun+http://127.0.0.1:9876/proxy', "
             f"got {connect!r}"
         )
+    if images_fps is not None and not (
+        isinstance(images_fps, (int, float)) and 0 < images_fps < 1000
+    ):
+        raise RecordError(f"images_fps must be a number in (0, 1000) per s, got {images_fps!r}")
     if not (isinstance(port, int) and 0 < port < 65536):
         raise RecordError(f"port must be an integer in 1..65535, got {port!r}")
     target = None if path is None else Path(path)
@@ -357,6 +367,11 @@ def record(
             sinks += [rr.GrpcSink(connect)] if connect is not None else []
             rec.set_sinks(*sinks, default_blueprint=bp)
             stats = log_timeline(rec, sim, chunk_frames=chunk_frames, progress=progress)
+            if images_fps is not None:
+                from workcell.record.rr_images import log_images
+
+                w, h = image_size
+                log_images(rec, sim, fps=images_fps, camera=image_camera, width=w, height=h)
             rec.flush()
         except RuntimeError as exc:
             if not (spawn or connect):

@@ -11,10 +11,11 @@ are in pixels, times in seconds of simulated time. These names are also importab
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -35,6 +36,7 @@ __all__ = [
     "KeyFrame",
     "contact_sheet",
     "key_frames",
+    "rendered_frames",
     "save_mp4",
     "video_frames",
 ]
@@ -183,27 +185,46 @@ def save_mp4(
     if width % 2 or height % 2:
         raise RenderError(f"MP4 width and height must be even, got {width} x {height}")
     idx = video_frames(sim, fps)
-    cam = _camera_for(sim, camera, width, height)
     show = sys.stderr.isatty() if progress is None else progress
-    data = mujoco.MjData(sim.model)
     p = Path(path)
     with (
-        CellRenderer(sim.model, width, height) as r,
         atomic_path(p, suffix=p.suffix) as tmp,
         av.open(tmp, mode="w", format="mp4") as out,
     ):
         stream = out.add_stream("libx264", rate=Fraction(fps).limit_denominator(1000))
         stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
         stream.options = {"crf": str(crf), "preset": "veryfast"}
-        qs = _frames_qpos(sim, sorted(set(idx.tolist())))  # idx never decreases: one pass
-        img, last = None, -1
-        for i in tqdm(idx.tolist(), disable=not show, unit="frame", desc="mp4"):
-            if i != last:
-                data.qpos[:] = next(qs)
-                mujoco.mj_forward(sim.model, data)
-                img, last = r.render(data, cam), i
+        pictures = rendered_frames(sim, idx, camera=camera, width=width, height=height)
+        for _, img in tqdm(pictures, total=len(idx), disable=not show, unit="frame", desc="mp4"):
             for packet in stream.encode(av.VideoFrame.from_ndarray(img, format="rgb24")):
                 out.mux(packet)
         for packet in stream.encode():
             out.mux(packet)
     return len(idx)
+
+
+def rendered_frames(
+    sim: Simulator,
+    frames: Sequence[int] | NDArray[np.intp],
+    *,
+    camera: str | None = None,
+    width: int = 640,
+    height: int = 480,
+) -> Iterator[tuple[int, NDArray[np.uint8]]]:
+    """(frame, picture (H, W, 3) uint8) for each timeline frame of a non-decreasing list,
+    from one camera (default: the overview fitted over the whole run); a repeated frame
+    is rendered once."""
+    idx = [int(i) for i in frames]
+    if any(b < a for a, b in itertools.pairwise(idx)):
+        raise RenderError("rendered_frames: frames must not decrease")
+    cam = _camera_for(sim, camera, width, height)
+    data = mujoco.MjData(sim.model)
+    with CellRenderer(sim.model, width, height) as r:
+        qs = _frames_qpos(sim, sorted(set(idx)))  # one pass over the timeline
+        img, last = None, -1
+        for i in idx:
+            if i != last:
+                data.qpos[:] = next(qs)
+                mujoco.mj_forward(sim.model, data)
+                img, last = r.render(data, cam), i
+            yield i, img
