@@ -53,6 +53,7 @@ MODULES = [
     "workcell.sim.gripping",
     "workcell.sim.profiles",
     "workcell.sim.tasks",
+    "workcell.sim.planning",
     "workcell.sim.concurrent",
     "workcell.checks",
     "workcell.sim.physics",

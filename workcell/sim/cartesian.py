@@ -29,7 +29,7 @@ from workcell.cell.workcell import RobotPlacement
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, KinematicsError, ProgramError, UnreachableError
 from workcell.robots.ik_closed import puma_config, puma_ik_report
-from workcell.sim.profiles import step_times
+from workcell.sim.planning import plan_waypoints
 from workcell.spatial import angle_between, as_transform, invert
 
 __all__ = [
@@ -215,7 +215,9 @@ class CartesianCommands:
             )
         except UnreachableError as exc:
             raise UnreachableError(f"move_straight_line '{name}': {exc}") from exc
-        times, Qr = self._plan_waypoints(name, q0, Qw)
+        times, Qr = plan_waypoints(
+            q0, Qw, start=self._start_time(name), speed=self.speed(name), dt=self.dt
+        )
         dev, i = line_deviation(placement, Qr, start[:3, 3], target[:3, 3])
         if dev > self.line_tolerance:
             raise UnreachableError(
@@ -227,23 +229,3 @@ class CartesianCommands:
         self._run(
             name, times, Qr, "move_straight_line", f"{length * 1e3:.4g} mm line, {len(Qw)} samples"
         )
-
-    def _plan_waypoints(self, name: str, q0: Array, Qw: Array) -> tuple[Array, Array]:
-        """Path-mode frames through joint waypoints Qw (k, dof), linear between them."""
-        speed, dt = self._speed[name], self.dt
-        times, rows = [np.empty(0)], [np.empty((0, len(q0)))]
-        clock, prev = self._start_time(name), q0
-        for q in Qw:
-            d = q - prev
-            big = float(np.max(np.abs(d)))
-            if big == 0.0:
-                continue
-            T = big / speed
-            t = step_times(T, dt)
-            R = prev + np.outer(t / T, d)
-            R[-1] = q
-            times.append(clock + t)
-            rows.append(R)
-            clock += T
-            prev = q
-        return np.concatenate(times), np.concatenate(rows)

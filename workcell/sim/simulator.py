@@ -77,7 +77,7 @@ applied restores joints, clocks, speeds and timeline as they were before the com
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -103,6 +103,7 @@ from workcell.sim.contacts import (
     contact_model,
 )
 from workcell.sim.gripping import Carried, GraspRecord, GripperCommands, Hold
+from workcell.sim.planning import Rows, plan_move
 from workcell.sim.profiles import step_times
 from workcell.sim.timeline import DEFAULT_MEMORY_LIMIT, Event, Timeline
 
@@ -112,7 +113,6 @@ MODES = ("path", "joint-by-joint", "playback")
 JOINT_BY_JOINT_CLOCKS = ("thesis", "sequential")
 
 Array = NDArray[np.float64]
-Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, hi)
 _EMIT_CHUNK = 16384  # frames built and emitted at a time
 
 
@@ -406,46 +406,18 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         return a
 
     def _plan(self, name: str, q0: Array, target: Array) -> tuple[Array, Rows]:
-        """Simulated times (k,) of a move and its joint values (k, dof; last row = target),
-        the latter as an array or, in path mode, a function of a row range (so a long
-        motion is never held in memory at once)."""
-        speed, dt, prof, acc = self._speed[name], self.dt, self.profile, self.acceleration
-        delta = target - q0
-        big = float(np.max(np.abs(delta))) if len(delta) else 0.0
-        if big == 0.0:
-            return np.empty(0), np.empty((0, len(q0)))
-        if self.mode != "joint-by-joint":  # path and playback: eq. 4.27, 4.28
-            T = profiles.duration(prof, big, speed, acc)
-            t = step_times(T, dt)
-            s = profiles.progress(prof, t, T, big, speed, acc)
-            last = len(t) - 1
-
-            def rows(lo: int, hi: int) -> Array:
-                Q = q0 + np.outer(s[lo:hi], delta)
-                if hi > last:
-                    Q[last - lo] = target
-                return Q
-
-            return self._start_time(name) + t, rows
-        times, rows = [], []
-        q = q0.copy()
-        clock = self._start_time(name)
-        fastest = int(np.argmax(np.abs(delta)))
-        for i in np.flatnonzero(delta):
-            di = abs(float(delta[i]))
-            Ti = profiles.duration(prof, di, speed, acc)
-            t = step_times(Ti, dt)
-            Q = np.repeat(q[None, :], len(t), axis=0)
-            Q[:, i] = q0[i] + delta[i] * profiles.progress(prof, t, Ti, di, speed, acc)
-            Q[-1, i] = target[i]
-            q[i] = target[i]
-            if self.joint_by_joint_clock == "sequential" or i == fastest:
-                times.append(clock + t)
-                clock += Ti
-            else:  # thesis: the clock runs only while the joint that moves most moves
-                times.append(np.full(len(t), clock))
-            rows.append(Q)
-        return np.concatenate(times), np.concatenate(rows)
+        """The frames of one move of robot ``name`` (see :mod:`workcell.sim.planning`)."""
+        return plan_move(
+            q0,
+            target,
+            start=self._start_time(name),
+            speed=self._speed[name],
+            dt=self.dt,
+            joint_by_joint=self.mode == "joint-by-joint",
+            clock=self.joint_by_joint_clock,
+            profile=self.profile,
+            acceleration=self.acceleration,
+        )
 
     def _move(self, name: str, target: Array, command: str) -> None:
         placement = self.cell.robots[name]
