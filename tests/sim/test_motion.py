@@ -182,3 +182,16 @@ def test_bad_options_are_refused():
         sim.set_mode("fast")
     sim.set_mode("joint-by-joint")
     assert sim.mode == "joint-by-joint"
+
+
+def test_long_commands_show_progress(capsys):
+    sim = make(dt=0.001, progress=True)
+    sim.set_speed(ROBOT, 0.01)
+    sim.move_joints_relative(ROBOT, np.radians([70.0, 0, 0, 0, 0, 0]))  # 122,173 frames
+    err = capsys.readouterr().err
+    assert "move_joints_relative" in err
+    assert "frame" in err
+    quiet = make(dt=0.001, progress=False)
+    quiet.set_speed(ROBOT, 0.01)
+    quiet.move_joints_relative(ROBOT, np.radians([70.0, 0, 0, 0, 0, 0]))
+    assert capsys.readouterr().err == ""

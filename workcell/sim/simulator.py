@@ -76,6 +76,7 @@ applied restores joints, clocks, speeds and timeline as they were before the com
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -84,6 +85,7 @@ from typing import Any
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from tqdm import tqdm
 
 from workcell.cell.compile import CompiledCell, compile_cell
 from workcell.cell.workcell import Workcell
@@ -114,6 +116,7 @@ JOINT_BY_JOINT_CLOCKS = ("thesis", "sequential")
 
 Array = NDArray[np.float64]
 _EMIT_CHUNK = 16384  # frames built and emitted at a time
+_PROGRESS_FRAMES = 100_000  # commands longer than this show a progress bar
 
 
 class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
@@ -128,7 +131,8 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
     ``stop_on_collision`` and ``contact_tolerance`` (m): collision events (module doc);
     ``profile`` ("linear", "trapezoid", "quintic") and ``acceleration`` (rad/s^2, for
     "trapezoid"): joint-move time profiles; ``line_tolerance`` (m): the largest
-    deviation of a straight line's frames from the line.
+    deviation of a straight line's frames from the line; ``progress``: a progress bar on
+    stderr for commands of more than 100,000 frames (None: only when stderr is a terminal).
     """
 
     def __init__(
@@ -148,6 +152,7 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         profile: str = "linear",
         acceleration: float = 2.0,
         line_tolerance: float = 1e-3,
+        progress: bool | None = None,
     ) -> None:
         if mode not in MODES:
             raise ProgramError(f"unknown simulation mode {mode!r}; valid: {', '.join(MODES)}")
@@ -174,6 +179,7 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         self.profile = profile
         self.acceleration = float(acceleration)
         self.line_tolerance = float(line_tolerance)
+        self.progress = progress
         self.check_collisions = bool(check_collisions)
         self.stop_on_collision = bool(stop_on_collision)
         self.dt = float(dt)
@@ -442,11 +448,16 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         base, adr = self.data.qpos.copy(), self._qadr[name]
         t_before = self.sim_time
         with self._transaction():
-            for lo in range(0, k, _EMIT_CHUNK):
-                hi = min(k, lo + _EMIT_CHUNK)
-                Q = np.repeat(base[None, :], hi - lo, axis=0)
-                Q[:, adr] = rows(lo, hi)
-                self._emit(times[lo:hi], Q, carried, name)
+            show = k > _PROGRESS_FRAMES and (
+                sys.stderr.isatty() if self.progress is None else self.progress
+            )
+            with tqdm(total=k, unit="frame", desc=command, leave=False, disable=not show) as bar:
+                for lo in range(0, k, _EMIT_CHUNK):
+                    hi = min(k, lo + _EMIT_CHUNK)
+                    Q = np.repeat(base[None, :], hi - lo, axis=0)
+                    Q[:, adr] = rows(lo, hi)
+                    self._emit(times[lo:hi], Q, carried, name)
+                    bar.update(hi - lo)
             self.timeline.add_event(
                 self.sim_time,
                 name,
