@@ -44,9 +44,21 @@ def _shell(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from workcell.program.interpreter import run_script
+    from pathlib import Path
 
-    session = run_script(args.script, echo=args.echo)
+    from workcell.errors import WorkcellError
+    from workcell.program.interpreter import run_script
+    from workcell.program.session import Session
+
+    session = Session(base_dir=Path(args.script).parent)
+    try:
+        run_script(args.script, session, echo=args.echo)
+    except WorkcellError as exc:
+        if session.sim is not None:  # keep what ran, with the error, in the files asked for
+            session.sim.log_error(exc)
+            _outputs(args, session.sim)
+        raise
+    _outputs(args, session.sim)
     if args.summary and session.sim is not None:
         import json
 
@@ -54,6 +66,24 @@ def _run(args: argparse.Namespace) -> int:
 
         print(json.dumps(to_jsonable(session.sim.summary())))
     return 0
+
+
+def _outputs(args: argparse.Namespace, sim: Any) -> None:
+    """Write the recording and the picture ``--save`` and ``--render`` ask for."""
+    if (args.save or args.render) and sim is None:
+        from workcell.errors import ProgramError
+
+        raise ProgramError("--save/--render: the script never started a simulation")
+    if args.save:
+        from workcell.record import record
+
+        stats = record(sim, args.save)
+        print(f"recording written to {stats.path} (open it with: rerun {stats.path})")
+    if args.render:
+        from workcell.record import contact_sheet
+
+        contact_sheet(sim, args.render)
+        print(f"picture written to {args.render}")
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -110,6 +140,8 @@ def register(sub: Any) -> None:
     run.add_argument(
         "--summary", action="store_true", help="print the simulation's summary as JSON at the end"
     )
+    run.add_argument("--save", metavar="FILE.rrd", help="record the run (also up to an error)")
+    run.add_argument("--render", metavar="FILE.png", help="a contact sheet of the run's key frames")
     run.set_defaults(func=_run)
 
     serve = sub.add_parser(

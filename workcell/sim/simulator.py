@@ -351,6 +351,12 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
                 self._wall += time.perf_counter() - c0
             self.timeline.add_event(self.sim_time, None, "wait", f"wait {s:.6g} s")
 
+    def log_error(self, exc: BaseException, robot: str | None = None) -> None:
+        """Note on the timeline that the program stopped on ``exc``: an ``error`` event
+        (its type and message) at the current time. The failed command itself changed
+        nothing; this is for runners that record or report the run up to the error."""
+        self.timeline.add_event(self.sim_time, robot, "error", f"{type(exc).__name__}: {exc}")
+
     def play(self, realtime: bool | None = None, start: int = 0) -> int:
         """Replay the stored frames from ``start`` on (any mode; meant for playback).
 
