@@ -125,7 +125,9 @@ class GripperCommands:
             self._holds[name] = Hold(part, rel, pos, quat)
             self._holders[part].append(name)
             self._update_exclusions()
-            self._set_fingers(name, min(chosen.width, opening) / 2.0)
+            # the fingers stop a contact tolerance short of the part: touching, no overlap
+            travel = float(self.cell.robots[name].robot.gripper.finger_travel)
+            self._set_fingers(name, min(chosen.width / 2.0 + self.contacts.tolerance, travel))
             self.grasps.append(
                 GraspRecord(len(self.timeline) - 1, self.sim_time, name, part, "grasp", pos, quat)
             )
