@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from workcell.checks import is_finite_number
 from workcell.errors import ProgramError
 
 __all__ = [
@@ -99,7 +100,7 @@ def ref(v: object, what: str) -> str | tuple[str, str]:
 
 def number(v: object, what: str) -> float:
     """A finite number (int or float; not a bool)."""
-    if not _is_number(v) or not math.isfinite(float(v)):  # type: ignore[arg-type]
+    if not is_finite_number(v):
         raise ProgramError(f"{what} must be a finite number, got {_show(v)}")
     return float(v)  # type: ignore[arg-type]
 
@@ -107,8 +108,7 @@ def number(v: object, what: str) -> float:
 def count(v: object, what: str) -> int:
     """A whole number in 0 .. 10000 (an integral float such as 3.0 is accepted)."""
     if (
-        _is_number(v)
-        and math.isfinite(float(v))  # type: ignore[arg-type]
+        is_finite_number(v)
         and float(v) == int(v)  # type: ignore[arg-type]
         and 0 <= int(v) <= MAX_COUNT  # type: ignore[arg-type]
     ):

@@ -9,6 +9,7 @@ shell, the server) builds commands from it and runs them with ``command.execute(
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -23,7 +24,7 @@ __all__ = ["COMMANDS", "Command", "command_class", "from_wire"]
 COMMANDS: dict[str, type[Command]] = {}
 
 
-class Command:
+class Command(abc.ABC):
     """Base of every command: ``execute(session)`` runs it; ``wire`` is its protocol name."""
 
     wire: ClassVar[str] = ""
@@ -43,9 +44,9 @@ class Command:
                 value = getattr(self, f.name)
                 object.__setattr__(self, f.name, conv(value, f"{self.wire}: {f.name}"))
 
+    @abc.abstractmethod
     def execute(self, session: Session) -> Any:
         """Run the command on ``session``; return its result (plain values, arrays)."""
-        raise NotImplementedError
 
     def to_args(self) -> dict[str, Any]:
         """The command's arguments as JSON-able plain values (tuples as lists)."""

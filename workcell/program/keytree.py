@@ -15,6 +15,7 @@ continuations at the end of a partial line. With a context (a
 
 from __future__ import annotations
 
+import abc
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, NoReturn
@@ -102,16 +103,16 @@ class Cursor:
         return list(self.ctx.names(kind))
 
 
-class Node:
+class Node(abc.ABC):
     """A node of the key tree."""
 
+    @abc.abstractmethod
     def match(self, cur: Cursor) -> None:
         """Consume this node's tokens, store its values; raise _Mismatch on a mismatch."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def expects(self, cur: Cursor) -> list[str]:
         """What may come at this node's start (words, or <placeholders>)."""
-        raise NotImplementedError
 
 
 def find_keyword(word: str, keys: list[str], hidden: tuple[str, ...] = ()) -> str | None:
