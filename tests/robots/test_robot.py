@@ -181,6 +181,11 @@ def test_invalid_definitions_raise():
         Joint("x", limits=(1.0, -1.0))
     with pytest.raises(KinematicsError, match="kind"):
         Joint("x", kind="spherical")
+    for what in ("max_speed", "max_acceleration", "max_jerk"):
+        for bad in (0.0, -1.0, float("nan")):
+            with pytest.raises(KinematicsError, match=what):
+                Joint("x", **{what: bad})
+    assert np.all(np.isinf(Robot("r", [Joint("a")]).max_jerks))
     with pytest.raises(KinematicsError, match="repeat"):
         Robot("r", [Joint("a"), Joint("a")])
     with pytest.raises(KinematicsError, match="6 finite"):

@@ -39,8 +39,10 @@ _FK_CHUNK = 2048  # poses per batched FK step (measured: 1.5M poses/s here again
 class Joint:
     """One DH row and its joint: ``kind`` revolute (q in rad) or prismatic (q in m).
 
-    ``limits`` (lo, hi) and ``max_speed`` (rad/s or m/s) bound the joint variable q;
-    ``offset`` is added to q (theta = q + offset, or d = q + offset for prismatic joints).
+    ``limits`` (lo, hi) and ``max_speed`` (rad/s or m/s), ``max_acceleration`` (rad/s^2
+    or m/s^2) and ``max_jerk`` (rad/s^3 or m/s^3) bound the joint variable q and its
+    derivatives (inf where none is known); ``offset`` is added to q (theta = q + offset,
+    or d = q + offset for prismatic joints).
     """
 
     name: str
@@ -52,6 +54,8 @@ class Joint:
     kind: Literal["revolute", "prismatic"] = "revolute"
     limits: tuple[float, float] = (-np.pi, np.pi)
     max_speed: float = float("inf")
+    max_acceleration: float = float("inf")
+    max_jerk: float = float("inf")
 
     def __post_init__(self) -> None:
         if self.kind not in ("revolute", "prismatic"):
@@ -63,10 +67,12 @@ class Joint:
             raise KinematicsError(
                 f"joint '{self.name}': limits must be finite with lo < hi, got {self.limits}"
             )
-        if not self.max_speed > 0:
-            raise KinematicsError(
-                f"joint '{self.name}': max_speed must be > 0, got {self.max_speed}"
-            )
+        for what in ("max_speed", "max_acceleration", "max_jerk"):
+            value = getattr(self, what)
+            if not value > 0:
+                raise KinematicsError(
+                    f"joint '{self.name}': {what} must be > 0 (inf: no limit), got {value}"
+                )
 
 
 @dataclass(frozen=True)
@@ -175,6 +181,16 @@ class Robot:
     def max_speeds(self) -> Array:
         """Per-joint speed limits (rad/s or m/s; inf where none is published)."""
         return np.array([j.max_speed for j in self.joints])
+
+    @property
+    def max_accelerations(self) -> Array:
+        """Per-joint acceleration limits (rad/s^2 or m/s^2; inf where none is known)."""
+        return np.array([j.max_acceleration for j in self.joints])
+
+    @property
+    def max_jerks(self) -> Array:
+        """Per-joint jerk limits (rad/s^3 or m/s^3; inf where none is known)."""
+        return np.array([j.max_jerk for j in self.joints])
 
     @property
     def revolute(self) -> NDArray[np.bool_]:
