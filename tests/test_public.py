@@ -40,7 +40,7 @@ MODULES = [
     "workcell.robots.ik_mink",
     "workcell.robots.ik_newton",
     "workcell.robots.mjcf",
-    "workcell.robots.meshes",
+    "workcell.meshgeoms",
     "workcell.cell",
     "workcell.cell.workcell",
     "workcell.cell.compile",

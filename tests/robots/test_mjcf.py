@@ -20,10 +20,10 @@ import trimesh
 
 from workcell import solids, spatial
 from workcell.errors import ModelError
+from workcell.meshgeoms import convex_pieces
 from workcell.modeller.model import Model
 from workcell.robots import Joint, LinkGeometry, Robot, puma260, puma560
 from workcell.robots.gripper import attach_gripper, parallel_gripper
-from workcell.robots.meshes import convex_pieces
 from workcell.robots.mjcf import (
     ARM_DENSITY,
     body_name,

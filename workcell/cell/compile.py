@@ -5,7 +5,7 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
 - ``ground``: a plane at z = 0;
 - static part ``P``: geoms of the worldbody at the part's pose: ``P.visual`` (the exact
   mesh, ``inertia="exact"``, no contacts, group 2) and ``P.col{i}`` (convex collision
-  pieces, group 3; see :func:`workcell.robots.meshes.convex_pieces`);
+  pieces, group 3; see :func:`workcell.meshgeoms.convex_pieces`);
 - movable part ``P``: a body ``P`` at its pose with a free joint ``P.free``, one visual
   mesh geom ``P.visual`` carrying the mass (exact inertia at the part's density) and
   collision geoms ``P.col{i}`` with density 0;
@@ -22,8 +22,8 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
   :mod:`workcell.robots.mjcf`), ``timestep`` (s), the ``implicitfast`` integrator (it
   integrates the servos' damping implicitly, stable at the default timestep) and stiff
   contacts (every collision geom, the ground included, has ``solref`` =
-  :data:`~workcell.robots.mjcf.CONTACT_SOLREF` and ``solimp`` =
-  :data:`~workcell.robots.mjcf.CONTACT_SOLIMP`: with MuJoCo's default contacts a resting
+  :data:`~workcell.meshgeoms.CONTACT_SOLREF` and ``solimp`` =
+  :data:`~workcell.meshgeoms.CONTACT_SOLIMP`: with MuJoCo's default contacts a resting
   part sinks ~0.2 mm and a faceted one creeps ~0.2 mm/s; these give ~0.002 mm and none),
   so the exported file plays in MuJoCo's viewer with its actuators; the keyframe
   ``initial`` holds every actuator at its joint's initial value (load it in the viewer, or
@@ -46,19 +46,22 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
-import trimesh
 
 from workcell.cell.workcell import Workcell
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError
 from workcell.files import atomic_write_bytes, atomic_write_text
-from workcell.modeller.model import Model
-from workcell.robots.meshes import convex_pieces, is_convex, stl_bytes
-from workcell.robots.mjcf import (
+from workcell.meshgeoms import (
     CONTACT_SOLIMP,
     CONTACT_SOLREF,
     MESHDIR,
+    MeshAssets,
     add_mesh_geoms,
+    collision_meshes,
+    convex_pieces,
+)
+from workcell.modeller.model import Model
+from workcell.robots.mjcf import (
     body_name,
     finger_joint_names,
     gripper_body_name,
@@ -85,8 +88,6 @@ DEFAULT_TIMESTEP = 0.002  # s: MuJoCo's default; the grasp weld's solref needs <
 GRASP_SOLREF = (0.004, 1.0)
 # anchor (3) | relpos (3) | relquat wxyz (4) | torquescale | flag (0: relpose given)
 WELD_DATA = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
-_EXACT = mujoco.mjtMeshInertia.mjMESH_INERTIA_EXACT
-_MESH = mujoco.mjtGeom.mjGEOM_MESH
 
 
 @dataclass
@@ -122,25 +123,7 @@ def _pos_quat(T: np.ndarray) -> tuple[list[float], list[float]]:
     return T[:3, 3].tolist(), quat_from_matrix(T[:3, :3]).tolist()
 
 
-def _pieces(model: Model, ref: tuple[str, str]) -> tuple[list[trimesh.Trimesh], bool]:
-    """Convex collision pieces of a block or object in its own frame, and whether it is convex."""
-    level, name = ref
-    if level == "block":
-        return convex_pieces(model, name)
-    mesh = model.world_mesh(ref)
-    if is_convex(mesh):
-        return [mesh], True
-    out: list[trimesh.Trimesh] = []
-    for rel in model.relations(ref):
-        if rel.target_level not in ("block", "object"):
-            return [mesh.convex_hull], False
-        sub, _ = _pieces(model, (rel.target_level, rel.target))
-        out.extend(p.copy().apply_transform(rel.transform) for p in sub)
-    return (out or [mesh.convex_hull]), False
-
-
 def _add_part_geoms(
-    spec: mujoco.MjSpec,
     parent: mujoco.MjsBody,
     model: Model,
     name: str,
@@ -148,7 +131,7 @@ def _add_part_geoms(
     colour: tuple[float, ...],
     pose: np.ndarray,
     density: float,
-    assets: dict[str, bytes],
+    reg: MeshAssets,
 ) -> None:
     """Mesh assets of a part, its visual (mass-carrying) geoms and collision geoms in ``parent``.
 
@@ -160,22 +143,13 @@ def _add_part_geoms(
         visuals = [(f"{name}.mesh{k}", f"{name}.visual{k}", p.mesh) for k, p in enumerate(parts)]
     else:
         visuals = [(f"{name}.mesh", f"{name}.visual", model.world_mesh(entity))]
-    for vis, _, mesh in visuals:
-        assets[f"{vis}.stl"] = stl_bytes(mesh)
-        spec.add_mesh(name=vis, file=f"{vis}.stl", inertia=_EXACT)
-    pieces, convex = _pieces(model, entity)
-    cols = [v[0] for v in visuals]
-    if not convex:
-        cols = []
-        for i, p in enumerate(pieces):
-            mname = f"{name}.hull{i}"
-            assets[f"{mname}.stl"] = stl_bytes(p)
-            spec.add_mesh(name=mname, file=f"{mname}.stl", inertia=_EXACT)
-            cols.append(mname)
+    meshes = [reg.add(vis, mesh) for vis, _, mesh in visuals]
+    pieces, convex = convex_pieces(model, entity)
+    cols = meshes if convex else collision_meshes(reg, name, pieces, False, meshes[0])
     pos, quat = _pos_quat(pose)
     add_mesh_geoms(
         parent,
-        [(geom, vis) for vis, geom, _ in visuals],
+        [(geom, mesh) for (_, geom, _), mesh in zip(visuals, meshes, strict=True)],
         cols,
         collision_prefix=name,
         pos=pos,
@@ -204,7 +178,8 @@ def _build(cell: Workcell, timestep: float) -> CompiledCell:
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.compiler.meshdir = MESHDIR
     spec.modelname = cell.name
-    assets: dict[str, bytes] = {}
+    reg = MeshAssets(spec)
+    assets = reg.assets
     out = CompiledCell(spec=spec, model=None)  # type: ignore[arg-type]
     spec.worldbody.add_geom(
         name=GROUND,
@@ -217,12 +192,12 @@ def _build(cell: Workcell, timestep: float) -> CompiledCell:
     spec.worldbody.add_light(name="light", pos=[0, 0, 3], dir=[0, 0, -1])
     m = cell.model
     for p in cell.static_parts.values():
-        _add_part_geoms(spec, spec.worldbody, m, p.name, p.entity, p.colour, p.pose, 1000.0, assets)
+        _add_part_geoms(spec.worldbody, m, p.name, p.entity, p.colour, p.pose, 1000.0, reg)
     for p in cell.movable_parts.values():
         body = spec.worldbody.add_body(name=p.name)
         body.pos, body.quat = _pos_quat(p.pose)
         body.add_freejoint(name=f"{p.name}.free")
-        _add_part_geoms(spec, body, m, p.name, p.entity, p.colour, np.eye(4), p.density, assets)
+        _add_part_geoms(body, m, p.name, p.entity, p.colour, np.eye(4), p.density, reg)
         out.part_bodies[p.name] = p.name
         out.free_joints[p.name] = f"{p.name}.free"
     for r in cell.robots.values():

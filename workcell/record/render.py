@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 from workcell.errors import ModelError, RenderError
 from workcell.files import atomic_write_bytes
+from workcell.meshgeoms import COLLISION_GROUP
 from workcell.record.gl import free_context, open_context
 
 if TYPE_CHECKING:
@@ -61,7 +62,6 @@ __all__ = [
 ]
 
 _SHEETS = ("KEY_EVENT_KINDS", "KeyFrame", "contact_sheet", "key_frames", "save_mp4", "video_frames")
-_COLLISION_GROUP = 3
 _SKY_TOP = np.array([0.45, 0.56, 0.72])  # background gradient (RGB 0-1), top to horizon
 _SKY_HORIZON = np.array([0.74, 0.78, 0.84])
 _FLOOR_RGBA = np.array([0.46, 0.49, 0.54, 1.0])  # planes: darker than the pale arm links
@@ -127,7 +127,7 @@ class CellRenderer:
         m.geom_rgba[planes] = _FLOOR_RGBA
         self.model = m
         self.option = mujoco.MjvOption()
-        self.option.geomgroup[_COLLISION_GROUP:] = 0
+        self.option.geomgroup[COLLISION_GROUP:] = 0
         self.option.sitegroup[:] = 0
         self.scene = mujoco.MjvScene(m, maxgeom=max(1000, 2 * m.ngeom))
         self._rect = mujoco.MjrRect(0, 0, self.width, self.height)
@@ -246,7 +246,7 @@ def _floor_grid(m: mujoco.MjModel) -> list[tuple[NDArray[np.float64], NDArray[np
     for g in planes:
         if m.geom_matid[g] >= 0:  # the floor has its own material (a grid texture, say)
             return []
-        if m.geom_group[g] < _COLLISION_GROUP and data.geom_xmat[g][8] > 1 - 1e-9:
+        if m.geom_group[g] < COLLISION_GROUP and data.geom_xmat[g][8] > 1 - 1e-9:
             z = float(data.geom_xpos[g][2]) + 1e-3
             break
     else:
@@ -267,7 +267,7 @@ def _floor_grid(m: mujoco.MjModel) -> list[tuple[NDArray[np.float64], NDArray[np
 def _visual_points(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
     """World corners (8 per geom) of the bounding boxes of the visible non-plane geoms."""
     keep = (
-        (model.geom_group < _COLLISION_GROUP)
+        (model.geom_group < COLLISION_GROUP)
         & (model.geom_type != mujoco.mjtGeom.mjGEOM_PLANE)
         & (model.geom_rgba[:, 3] > 0)
     )
