@@ -39,6 +39,7 @@ __all__ = [
     "atomic_path",
     "atomic_write_bytes",
     "atomic_write_text",
+    "check_folder",
     "check_writable",
     "install_sigterm_cleanup",
     "load_json",
@@ -46,6 +47,7 @@ __all__ = [
     "read_bytes",
     "read_text",
     "resolve_inside",
+    "write_files",
 ]
 
 Error = type[WorkcellError]
@@ -243,6 +245,27 @@ def atomic_write_text(
     atomic_write_bytes(path, text.encode("utf-8"), error=error, mode=mode)
 
 
+def check_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
+    """Check that folder ``path`` exists or can be created, and that files can be written
+    in it (the nearest existing folder on the way gets a real temp file, removed at
+    once); ``error`` naming the path if not. Call it before expensive work."""
+    p = Path(os.path.realpath(os.fspath(path)))
+    here = p
+    while not here.exists():
+        if here.parent == here:
+            break
+        here = here.parent
+    if not here.is_dir():
+        raise error(f"cannot write into folder '{path}': '{here}' is not a folder")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".workcell.", suffix=".probe", dir=here)
+    except OSError as exc:
+        raise error(f"cannot write into folder '{path}': {_reason(exc)}") from exc
+    os.close(fd)
+    os.unlink(tmp)
+    return p
+
+
 def make_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
     """Create folder ``path`` and its parents when missing; ``error`` naming the path if not."""
     p = Path(path)
@@ -251,6 +274,17 @@ def make_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Pat
     except OSError as exc:
         raise error(f"cannot create folder '{path}': {_reason(exc)}") from exc
     return p
+
+
+def write_files(
+    folder: str | os.PathLike, files: dict[str, bytes], *, error: Error = WorkcellError
+) -> None:
+    """Write ``files`` (relative name -> bytes) into ``folder``, each atomically, creating
+    the folders on the way; ``error`` naming the path on any file-system failure."""
+    out = Path(folder)
+    for name, data in files.items():
+        make_folder((out / name).parent, error=error)
+        atomic_write_bytes(out / name, data, error=error)
 
 
 # ------------------------------------------------------------------ reading

@@ -46,10 +46,12 @@ def _shell(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from workcell.cli import check_outputs
     from workcell.errors import WorkcellError
     from workcell.program.interpreter import run_script
     from workcell.program.session import Session
 
+    check_outputs(rrd=args.save, png=args.render)
     session = Session(base_dir=Path(args.script).parent)
     try:
         run_script(args.script, session, echo=args.echo)
@@ -216,13 +218,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="workcell")
     register(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)
-    from workcell.errors import WorkcellError
+    from workcell.cli import run_command
 
-    try:
-        return args.func(args)
-    except WorkcellError as exc:
-        print(f"workcell: {type(exc).__name__}: {exc}", file=sys.stderr)
-        return 2
+    return run_command(args)
 
 
 if __name__ == "__main__":

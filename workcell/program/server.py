@@ -144,7 +144,7 @@ class _Handler(socketserver.StreamRequestHandler):
         srv = self.server
         self.cid = srv.next_connection_id()
         self.addr = str(self.client_address[0])
-        self.requests, self.session, self.greeted = 0, None, False
+        self.requests, self.session, self.greeted, self.expired = 0, None, False, False
         t0 = time.monotonic()
         log.info("connection %d from %s:%s opened", self.cid, self.addr, self.client_address[1])
         timer = threading.Timer(srv.hello_timeout, self._hello_expired)
@@ -158,6 +158,7 @@ class _Handler(socketserver.StreamRequestHandler):
             if c.reply is not None:
                 self._send(c.reply)
             why = c.why
+            self._linger()
         except OSError as exc:  # reset, broken pipe, timeout while sending
             why = f"connection lost ({exc.__class__.__name__})"
         finally:
@@ -166,6 +167,16 @@ class _Handler(socketserver.StreamRequestHandler):
                 "connection %d closed: %s (%d requests, %.1f s)",
                 self.cid, _clean(why), self.requests, time.monotonic() - t0,
             )  # fmt: skip
+
+    def _linger(self) -> None:
+        """Close gently: no more sending, then drop what the client still sends (up to
+        1 s, 2 MiB), so it reads the last reply instead of a connection reset."""
+        with contextlib.suppress(OSError):
+            self.connection.shutdown(socket.SHUT_WR)
+            self.connection.settimeout(1.0)
+            for _ in range(32):
+                if not self.connection.recv(65536):
+                    break
 
     def _hello_expired(self) -> None:
         if not self.greeted:
@@ -183,8 +194,8 @@ class _Handler(socketserver.StreamRequestHandler):
                     error_reply(None, ProtocolError(f"closed after {secs:g} s without a request")),
                     f"idle for {secs:g} s",
                 ) from None
-            if not line:
-                if getattr(self, "expired", False):
+            if not line or self.expired:
+                if self.expired:
                     secs = self.server.hello_timeout
                     raise _Closing(
                         error_reply(None, ProtocolError(f"no hello within {secs:g} s: closed")),

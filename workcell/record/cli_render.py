@@ -51,8 +51,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _render(args: argparse.Namespace) -> int:
+    from workcell.cli import check_outputs
     from workcell.record.render import gl_backend, render_cell, save_png
 
+    check_outputs(png=args.out)
     t0 = time.perf_counter()
     cell = load_cell(args.cell)
     image = render_cell(cell, camera=args.camera, width=args.width, height=args.height)
