@@ -251,11 +251,15 @@ def check_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Pa
     once); ``error`` naming the path if not. Call it before expensive work."""
     p = Path(os.path.realpath(os.fspath(path)))
     here = p
-    while not here.exists():
-        if here.parent == here:
+    while True:
+        try:
+            st = os.stat(here)
             break
-        here = here.parent
-    if not here.is_dir():
+        except FileNotFoundError:
+            here = here.parent  # the root folder exists: this ends
+        except OSError as exc:
+            raise error(f"cannot write into folder '{path}': {_reason(exc)}") from exc
+    if not stat.S_ISDIR(st.st_mode):
         raise error(f"cannot write into folder '{path}': '{here}' is not a folder")
     try:
         fd, tmp = tempfile.mkstemp(prefix=".workcell.", suffix=".probe", dir=here)
