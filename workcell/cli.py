@@ -272,6 +272,9 @@ def run_command(args: argparse.Namespace) -> int:
         print(f"workcell: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        # objects half-built when the interrupt came may fail in their finalizers on the
+        # way out; that is no news after Ctrl-C: keep the one line
+        sys.unraisablehook = lambda unraisable: None
         print("workcell: interrupted", file=sys.stderr)
         return 130
 

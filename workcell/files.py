@@ -24,9 +24,9 @@ import contextlib
 import errno
 import json
 import os
+import secrets
 import signal
 import stat
-import tempfile
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -159,13 +159,28 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
-def _mkstemp(p: Path, suffix: str, path: object, error: Error) -> str:
+@contextlib.contextmanager
+def _temp_file(p: Path, suffix: str, path: object, error: Error, doing: str) -> Iterator[str]:
+    """A new empty file (mode 0600) beside ``p``, removed when the block ends (unless it
+    was renamed away). Its name is chosen and tracked before it exists, so no Ctrl-C or
+    SIGTERM between creating and removing it can leave it behind."""
+    tmp = os.path.join(p.parent, f".{p.name[:80]}.{secrets.token_hex(4)}{suffix}")
+    with _live_lock:
+        _live.add(tmp)
+    not_ours = False
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name[:80]}.", suffix=suffix, dir=p.parent)
-    except OSError as exc:
-        raise error(f"cannot write '{path}': {_reason(exc)}") from exc
-    os.close(fd)
-    return tmp
+        try:
+            os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY | os.O_CLOEXEC, 0o600))
+        except OSError as exc:
+            not_ours = isinstance(exc, FileExistsError)
+            raise error(f"cannot {doing} '{path}': {_reason(exc)}") from exc
+        yield tmp
+    finally:
+        if not not_ours:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+        with _live_lock:
+            _live.discard(tmp)
 
 
 def check_writable(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
@@ -175,7 +190,8 @@ def check_writable(path: str | os.PathLike, *, error: Error = WorkcellError) -> 
     Call it before expensive work whose result goes to ``path``.
     """
     p, _ = _target(path, error)
-    os.unlink(_mkstemp(p, ".probe", path, error))
+    with _temp_file(p, ".probe", path, error, "write"):
+        pass
     return p
 
 
@@ -199,10 +215,7 @@ def atomic_path(
     """
     p, st = _target(path, error)
     install_sigterm_cleanup()
-    tmp = _mkstemp(p, suffix, path, error)
-    with _live_lock:
-        _live.add(tmp)
-    try:
+    with _temp_file(p, suffix, path, error, "write") as tmp:
         try:
             yield tmp
             with open(tmp, "rb+") as f:
@@ -221,13 +234,6 @@ def atomic_path(
             os.replace(tmp, p)
         except OSError as exc:
             raise error(f"cannot write '{path}': {_reason(exc)}") from exc
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    finally:
-        with _live_lock:
-            _live.discard(tmp)
 
 
 def atomic_write_bytes(
@@ -261,12 +267,8 @@ def check_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Pa
             raise error(f"cannot write into folder '{path}': {_reason(exc)}") from exc
     if not stat.S_ISDIR(st.st_mode):
         raise error(f"cannot write into folder '{path}': '{here}' is not a folder")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=".workcell.", suffix=".probe", dir=here)
-    except OSError as exc:
-        raise error(f"cannot write into folder '{path}': {_reason(exc)}") from exc
-    os.close(fd)
-    os.unlink(tmp)
+    with _temp_file(here / "workcell", ".probe", path, error, "write into folder"):
+        pass
     return p
 
 

@@ -76,11 +76,11 @@ def extrude(
         raise GeometryError(
             f"sweep '{name}': direction must be a finite 3-vector, got {direction!r}"
         )
+    limits.check("max_coordinate", float(np.abs(d).max()), f"sweep '{name}': the direction")
     if abs(d[2]) <= 1e-12 * max(1.0, float(np.linalg.norm(d))):
         raise GeometryError(
             f"sweep '{name}': the direction {d.tolist()} lies in the surface's plane (z = 0)"
         )
-    limits.check("max_coordinate", float(np.abs(d).max()), f"sweep '{name}': the direction")
     limits.check("max_facets", 4 * s.n_edges, f"sweep '{name}'")
     a2, b2 = s.edges()
     a = np.column_stack([a2, np.zeros(len(a2))])
