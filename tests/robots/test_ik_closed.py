@@ -27,7 +27,7 @@ from hypothesis import strategies as st
 
 from workcell import spatial
 from workcell.errors import GeometryError, KinematicsError
-from workcell.robots import Robot, ik_closed, puma260, puma560
+from workcell.robots import Joint, Robot, ik_closed, puma260, puma560
 from workcell.robots.ik_closed import (
     CONFIGS,
     puma_config,
@@ -45,6 +45,12 @@ MOUNTED = P560.with_(
 )
 ROBOTS = {"puma560": P560, "puma260": P260, "mounted": MOUNTED}
 TWO_PI = 2 * np.pi
+
+
+def with_dh(joint, **changes):
+    """The joint rebuilt from its DH row with some DH entries (or the convention) changed."""
+    row = {**dataclasses.asdict(joint.dh), **changes}
+    return Joint.from_dh(joint.name, **row, limits=joint.limits, max_speed=joint.max_speed)
 
 
 def wrapped(a):
@@ -78,7 +84,7 @@ def geometric_config(robot, q):
     w, e = arm_plane(robot, q)
     arm = "r" if w[0] >= 0 else "l"
     above = (e[1] - w[1] * e[0] / w[0]) > 0  # elbow height over the line at the elbow's x
-    wrist = "n" if np.sin(q[4] + robot.joints[4].offset) < 0 else "f"
+    wrist = "n" if np.sin(q[4] + robot.joints[4].dh.offset) < 0 else "f"
     return arm + ("u" if above else "d") + wrist
 
 
@@ -92,7 +98,7 @@ def arm_margin(robot, q):
 
 def margin(robot, q):
     """How far q is from every configuration boundary (dimensionless; 0 on one)."""
-    return min(arm_margin(robot, q), abs(np.sin(q[4] + robot.joints[4].offset)))
+    return min(arm_margin(robot, q), abs(np.sin(q[4] + robot.joints[4].dh.offset)))
 
 
 def has_in_limit_equivalent(robot, q):
@@ -298,7 +304,7 @@ def test_near_singular_wrist_is_flagged_and_exact():
 # ---------------------------------------------------------------- reach
 def reach_radii(robot):
     """Inner and outer radii (m) of the wrist-centre workspace about the shoulder, by hand."""
-    j = robot.joints
+    j = [jt.dh for jt in robot.joints]
     a2, a3, d3, d4 = j[1].a, j[2].a, j[2].d, j[3].d
     L = math.hypot(a3, d4)
     return math.hypot(L - a2, d3), math.hypot(a2 + L, d3)
@@ -316,7 +322,7 @@ def pose_with_wrist_centre(robot, p_wc, R=None):
 @pytest.mark.parametrize("name", list(ROBOTS))
 def test_reach_boundaries(name):
     robot = ROBOTS[name]
-    d1, d3 = robot.joints[0].d, robot.joints[2].d
+    d1, d3 = robot.joints[0].dh.d, robot.joints[2].dh.d
     inner, outer = reach_radii(robot)
     # along theta1 = 0 the shoulder offset points along -y: the wrist centre at
     # (rho, -d3, d1) lies at sqrt(rho^2 + d3^2) from the shoulder
@@ -338,7 +344,7 @@ def test_reach_boundaries(name):
 @pytest.mark.parametrize("name", list(ROBOTS))
 def test_unreachable_poses_give_empty_list_and_reason(name):
     robot = ROBOTS[name]
-    d1 = robot.joints[0].d
+    d1 = robot.joints[0].dh.d
     far = pose_with_wrist_centre(robot, [2.0, 0.0, d1])
     assert puma_ik(robot, far) == []
     assert robot.ik_closed_form(far) == []
@@ -358,7 +364,7 @@ def test_unreachable_poses_give_empty_list_and_reason(name):
 def test_zero_shoulder_offset_wrist_on_the_axis():
     # a Puma-like arm with d3 = a3 = 0: a wrist centre on the joint 1 axis leaves q1 free
     joints = list(P560.joints)
-    joints[2] = replace(joints[2], a=0.0, d=0.0)
+    joints[2] = with_dh(joints[2], a=0.0, d=0.0)
     robot = Robot(name="no_offset", joints=tuple(joints), family="puma")
     q = np.array([0.0, np.pi / 3, -np.pi / 6, 0.2, 0.5, -0.3])  # a2 cos q2 = d4 sin(q2 + q3)
     T = robot.fk(q)
@@ -420,14 +426,15 @@ def test_batch_fk_round_trip_and_single_pose():
 # ---------------------------------------------------------------- errors
 def test_refuses_non_puma_robots_and_bad_input():
     joints = list(P560.joints)
-    joints[3] = replace(joints[3], a=0.05)
+    joints[3] = with_dh(joints[3], a=0.05)
     bent = Robot(name="bent", joints=tuple(joints), family="puma")
     with pytest.raises(KinematicsError, match=r"a4 = 0\.05"):
         puma_ik(bent, P560.fk(np.zeros(6)))
     with pytest.raises(KinematicsError, match="no closed-form"):
         P560.with_(family=None).ik_closed_form(np.eye(4))
-    with pytest.raises(KinematicsError, match="modified"):
-        puma_ik(P560.with_(convention="modified"), np.eye(4))
+    modified = tuple(with_dh(j, convention="modified") for j in P560.joints)
+    with pytest.raises(KinematicsError, match="standard DH"):
+        puma_ik(P560.with_(joints=modified), np.eye(4))
     with pytest.raises(GeometryError, match="4x4"):
         puma_ik(P560, np.eye(3))
     with pytest.raises(GeometryError, match="non-finite"):
@@ -523,7 +530,7 @@ def test_single_pose_path_agrees_with_the_batch_path_and_robot_fk(name, data):
         # the FK errors below); and a tie (an angle at +-pi, or half a turn from
         # q_current) may go either way
         tol = np.full(6, 1e-11)
-        tol[[3, 5]] += 1e-14 / max(abs(math.sin(s.q[4] + robot.joints[4].offset)), 1e-300)
+        tol[[3, 5]] += 1e-14 / max(abs(math.sin(s.q[4] + robot.joints[4].dh.offset)), 1e-300)
         assert (np.abs(wrapped(s.q - Q[0, k])) <= tol).all()
         toward = Q[0, k] if q_current is None else wrapped(Q[0, k] - q_current)
         tie = np.abs(np.abs(toward) - np.pi) < 1e-9

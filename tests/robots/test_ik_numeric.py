@@ -51,10 +51,17 @@ def ur5_modified() -> Robot:
         (-90, 0, 0.0823),
     ]
     joints = tuple(
-        Joint(f"j{i + 1}", a=a, alpha=math.radians(al), d=d, limits=(-2 * math.pi, 2 * math.pi))
+        Joint.from_dh(
+            f"j{i + 1}",
+            a=a,
+            alpha=math.radians(al),
+            d=d,
+            convention="modified",
+            limits=(-2 * math.pi, 2 * math.pi),
+        )
         for i, (al, a, d) in enumerate(rows)
     )
-    return Robot("ur5_modified", joints, convention="modified")
+    return Robot("ur5_modified", joints)
 
 
 def ur5_standard() -> Robot:
@@ -67,7 +74,9 @@ def ur5_standard() -> Robot:
         (0.0823, 0, 0),
     ]
     joints = tuple(
-        Joint(f"j{i + 1}", a=a, alpha=math.radians(al), d=d, limits=(-2 * math.pi, 2 * math.pi))
+        Joint.from_dh(
+            f"j{i + 1}", a=a, alpha=math.radians(al), d=d, limits=(-2 * math.pi, 2 * math.pi)
+        )
         for i, (d, a, al) in enumerate(rows)
     )
     return Robot("ur5_standard", joints)
@@ -176,18 +185,18 @@ def test_newton_gauss_equations_and_jacobian():
 def test_position_gradient_and_hessian_match_finite_differences():
     """The closest-position objective's analytic gradient and exact Hessian (revolute and
     prismatic joints, both conventions) against central differences of robot.fk."""
-    prismatic_mix = (
-        Joint("a", a=0.1, alpha=0.3, d=0.2),
-        Joint("b", kind="prismatic", a=0.2, alpha=-1.0, theta=0.3, limits=(0.0, 1.0)),
-        Joint("c", a=0.3, alpha=1.2, d=0.1),
-        Joint("d", kind="prismatic", a=0.1, alpha=0.5, limits=(0.0, 1.0)),
-        Joint("e", a=0.2, alpha=0.7, d=0.1),
+    rows = (
+        dict(name="a", a=0.1, alpha=0.3, d=0.2),
+        dict(name="b", kind="prismatic", a=0.2, alpha=-1.0, theta=0.3, limits=(0.0, 1.0)),
+        dict(name="c", a=0.3, alpha=1.2, d=0.1),
+        dict(name="d", kind="prismatic", a=0.1, alpha=0.5, limits=(0.0, 1.0)),
+        dict(name="e", a=0.2, alpha=0.7, d=0.1),
     )
     robots = [
         robot_named("puma260"),
         robot_named("puma_placed"),
-        Robot("mixed_std", prismatic_mix),
-        Robot("mixed_mod", prismatic_mix, convention="modified"),
+        Robot("mixed_std", [Joint.from_dh(**r) for r in rows]),
+        Robot("mixed_mod", [Joint.from_dh(**r, convention="modified") for r in rows]),
     ]
     P = np.array([1.0, -0.5, 0.3])
 
@@ -325,7 +334,7 @@ def test_target_reachable_only_outside_the_limits_fails():
 # Published DH lengths (m): (d1, a2, a3, d3, d4, tool offset along z6)
 _PUMA_DH = {
     "puma560": (0.67183, 0.4318, 0.0203, 0.15005, 0.4318, 0.0),
-    "puma260": (0.3302, 0.199034, 0.0, 0.12446, 0.2032, 0.05588),
+    "puma260": (0.3302, 0.0254 * math.hypot(7.8, 0.75), 0.0, 0.12446, 0.2032, 0.05588),
 }
 
 

@@ -143,12 +143,12 @@ _LAST: tuple[weakref.ref[Robot] | None, _Puma | None] = (None, None)  # the last
 def _check_structure(robot: Robot) -> _Puma:
     """Validate the Puma 560 DH structure; raise KinematicsError saying what differs."""
     where = f"robot '{robot.name}' is not a Puma-family arm"
-    if robot.convention != "standard":
-        raise KinematicsError(f"{where}: closed-form IK needs standard DH, got {robot.convention}")
+    if any(j.dh is None or j.dh.convention != "standard" for j in robot.joints):
+        raise KinematicsError(f"{where}: closed-form IK needs standard DH rows")
     if robot.dof != 6 or any(j.kind != "revolute" for j in robot.joints):
         kinds = [j.kind for j in robot.joints]
         raise KinematicsError(f"{where}: closed-form IK needs 6 revolute joints, got {kinds}")
-    J = robot.joints
+    J = [j.dh for j in robot.joints]
     bad = []
     for i, j in enumerate(J):
         if abs(j.alpha - _ALPHA[i]) > 1e-9:

@@ -47,17 +47,12 @@ def _pose_errors(T: Array, T_target: Array) -> tuple[float, float]:
 def max_reach(robot: Robot) -> float:
     """Upper bound (m) on the distance from the origin of frame 0 (``robot.base``) to the tool point.
 
-    Sum over the DH rows of the largest translation each row can make (``sqrt(a^2 + d^2)``,
-    with d over its limits for a prismatic joint) plus the tool offset. Any target farther
-    than this is out of reach whatever the joint limits.
+    Sum over the joints of the largest translation each joint's transform can make
+    (:meth:`~workcell.robots.chain.Joint.max_translation`: ``sqrt(a^2 + d^2)`` for a DH
+    row, with d over its limits for a prismatic joint) plus the tool offset. Any target
+    farther than this is out of reach whatever the joint limits.
     """
-    r = 0.0
-    for j in robot.joints:
-        if j.kind == "prismatic":
-            d = max(abs(j.limits[0] + j.offset), abs(j.limits[1] + j.offset))
-        else:
-            d = abs(j.d)
-        r += math.hypot(j.a, d)
+    r = sum(j.max_translation() for j in robot.joints)
     return r + float(np.linalg.norm(robot.tool[:3, 3]))
 
 
@@ -257,7 +252,7 @@ def _finish(
     q = np.clip(a.q, robot.lower, robot.upper)
     ep, eo = _pose_errors(robot.fk(q), T_target)
     cfg = puma_config(robot, q) if robot.family == "puma" else None
-    singular = robot.family == "puma" and abs(math.sin(q[4] + robot.joints[4].offset)) < 1e-3
+    singular = robot.family == "puma" and abs(math.sin(q[4] + robot.joints[4].dh.offset)) < 1e-3
     ok = ep <= tol_p and eo <= tol_o and (config is None or cfg == config)
     if not ok and reason is None:
         if ep > tol_p or eo > tol_o:
