@@ -69,7 +69,6 @@ def puma560(*, geometry: bool = True) -> Robot:
             "qn": np.array([0, np.pi / 4, -np.pi, 0, np.pi / 4, 0]),
             "home": np.array([0, 0, -90, 0, 90, 0]) * _DEG,
         },
-        family="puma",
         source="P. Corke, Robotics Toolbox for Python, models/DH/Puma560.py (standard DH)",
     )
     return _geometry(r, scale=1.0) if geometry else r
@@ -85,7 +84,6 @@ def puma260(*, geometry: bool = True) -> Robot:
             "home": np.array([0, 0, -90, 0, 90, 0]) * _DEG,
             "zero": np.zeros(6),
         },
-        family="puma",
         source="RPI General Robotics Toolbox puma260b_robot(), after the Puma 260 manual p. 2-2",
     )
     return _geometry(r, scale=0.46) if geometry else r

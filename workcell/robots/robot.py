@@ -73,9 +73,9 @@ class Robot:
 
     ``tool`` (4x4) places the tool frame in the last link frame (the flange for robots
     whose tool is not set); ``nominal_speed`` (rad/s) is the thesis's robot speed: the
-    speed of the joint that moves most in a joint-space motion. ``family`` names a
-    closed-form IK solver (``"puma"``) when the geometry admits one. ``model`` holds the
-    link solids named by ``geometry``; ``source`` cites where the parameters come from.
+    speed of the joint that moves most in a joint-space motion. ``model`` holds the link
+    solids named by ``geometry``; ``source`` cites where the parameters come from. The
+    closed-form IK family (:attr:`ik_family`) is detected from the geometry.
     """
 
     name: str
@@ -84,7 +84,6 @@ class Robot:
     tool: Array = field(default_factory=lambda: np.eye(4))
     poses: Mapping[str, Array] = field(default_factory=dict)
     nominal_speed: float = 0.3
-    family: str | None = None
     model: Model | None = None
     geometry: tuple[LinkGeometry, ...] = ()
     source: str = ""
@@ -329,19 +328,24 @@ class Robot:
         return self.pose_jacobian(self._vector(q))[1]
 
     # ---------------------------------------------------------------- inverse kinematics
+    @property
+    def ik_family(self) -> str | None:
+        """The closed-form IK family, ``"opw"``, ``"ur"`` or None, detected from the joint
+        axes and verified by FK (:mod:`workcell.robots.ik_closed`; cached per robot)."""
+        from workcell.robots.ik_closed import family_of
+
+        return family_of(self)
+
     def ik_closed_form(self, T: ArrayLike, q_current: ArrayLike | None = None) -> list[IKSolution]:
-        """Every distinct closed-form solution of pose T (Puma family), up to 8.
+        """Every distinct closed-form solution of pose T (OPW and UR families), up to 8.
 
         In-limit solutions first, then nearest to ``q_current`` (see
-        :func:`workcell.robots.ik_closed.puma_ik_report` for the fields and the order).
+        :func:`workcell.robots.ik_closed.ik_report` for the fields and the order).
+        KinematicsError for a robot without a closed-form family.
         """
-        if self.family != "puma":
-            raise KinematicsError(
-                f"robot '{self.name}' has no closed-form IK (family {self.family!r}); use Robot.ik"
-            )
-        from workcell.robots.ik_closed import puma_ik
+        from workcell.robots.ik_closed import ik_all
 
-        return puma_ik(self, T, q_current)
+        return ik_all(self, T, q_current)
 
     def ik(
         self,
@@ -354,9 +358,9 @@ class Robot:
     ) -> IKSolution:
         """Numerical IK for pose T (4x4, base frame) from q0; never a silent wrong q.
 
-        ``method="mink"`` (differential IK with restarts; Puma robots are also seeded from
-        the closed form) or ``"newton-gauss"`` (the thesis's solver). ``config`` restricts
-        a Puma solution to a configuration such as ``"lun"``.
+        ``method="mink"`` (differential IK with restarts; OPW and UR robots are also seeded
+        from the closed form) or ``"newton-gauss"`` (the thesis's solver). ``config``
+        restricts the solution of an OPW or UR robot to a configuration such as ``"lun"``.
         """
         from workcell.robots.ik_numeric import solve
 
