@@ -130,7 +130,7 @@ def too_slow(c: object) -> bool:
     return (
         (isinstance(c, simc.SetSpeed) and c.speed < 0.1)
         or (isinstance(c, simc.Simulate) and (c.dt < 0.01 or c.realtime))
-        or (isinstance(c, simc.Play) and c.realtime is not False)
+        or (isinstance(c, simc.Play) and c.realtime)
         or (isinstance(c, simc.MoveStraightLine) and c.step < 1e-3)
     )
 
