@@ -68,8 +68,6 @@ _FLOOR_RGBA = np.array([0.46, 0.49, 0.54, 1.0])  # planes: darker than the pale 
 _GRID_RGBA = np.array([0.56, 0.59, 0.64, 1.0], np.float32)
 _backend: str | None = None  # the GL backend that worked, kept for the process
 
-Image = NDArray[np.uint8]
-
 
 def __getattr__(name: str) -> Any:
     """The names of :mod:`workcell.record.sheets`, imported on first use (it imports this
@@ -149,7 +147,7 @@ class CellRenderer:
         cam.type, cam.fixedcamid = mujoco.mjtCamera.mjCAMERA_FIXED, cid
         return cam
 
-    def render(self, data: mujoco.MjData, camera: str | mujoco.MjvCamera) -> Image:
+    def render(self, data: mujoco.MjData, camera: str | mujoco.MjvCamera) -> NDArray[np.uint8]:
         """An (H, W, 3) uint8 picture of ``data`` (poses as computed by mj_forward)."""
         if self._mjr is None:
             raise RenderError("the renderer is closed")
@@ -381,7 +379,7 @@ def render_frame(
     camera: str | None = None,
     width: int = 640,
     height: int = 480,
-) -> Image:
+) -> NDArray[np.uint8]:
     """The cell at timeline ``frame`` (negative counts from the end) as (H, W, 3) uint8.
 
     ``camera``: a camera of the cell by name, or None for :func:`overview_camera` over
@@ -398,7 +396,7 @@ def render_frame(
 
 def render_cell(
     cell: Workcell, *, camera: str | None = None, width: int = 640, height: int = 480
-) -> Image:
+) -> NDArray[np.uint8]:
     """The cell in its initial state (no simulation) as (H, W, 3) uint8; see :func:`render_frame`."""
     from workcell.cell.compile import compile_cell
 
