@@ -41,6 +41,7 @@ MODULES = [
     "workcell.robots.ik_newton",
     "workcell.robots.mjcf",
     "workcell.meshgeoms",
+    "workcell.decompose",
     "workcell.cell",
     "workcell.cell.workcell",
     "workcell.cell.compile",
