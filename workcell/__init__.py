@@ -18,6 +18,7 @@ from workcell.errors import (
     ProtocolError,
     RecordError,
     RenderError,
+    StudyError,
     UnreachableError,
     WorkcellError,
 )
@@ -46,6 +47,7 @@ __all__ = [
     "Relation",
     "RenderError",
     "Simulator",
+    "StudyError",
     "Surface",
     "Timeline",
     "UnreachableError",

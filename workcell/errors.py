@@ -17,6 +17,7 @@ __all__ = [
     "ProtocolError",
     "RecordError",
     "RenderError",
+    "StudyError",
     "UnreachableError",
     "WorkcellError",
 ]
@@ -68,3 +69,7 @@ class RenderError(WorkcellError):
 
 class RecordError(WorkcellError):
     """A recording could not be written or streamed (bad path, viewer unreachable)."""
+
+
+class StudyError(WorkcellError):
+    """A study could not be set up or run (bad parameter, output folder of another study)."""
