@@ -22,7 +22,6 @@ from typing import Any
 
 _LAZY = {  # imported on first use (``workcell --help`` stays light)
     "Candidate": "workcell.study.candidates",
-    "candidates": "workcell.study.candidates",
     "Outcome": "workcell.study.runner",
     "execute": "workcell.study.runner",
     "run": "workcell.study.runner",

@@ -215,19 +215,19 @@ def clearance(sim: Simulator, cm: ClearanceModel, tolerance: float) -> Clearance
     for adr, rho in cm.joints:
         step += np.abs(np.diff(Q[:, adr], axis=0)) @ rho
     D = np.concatenate([[0.0], np.cumsum(step)])  # displacement bound from frame 0 (m)
-    seen: dict[float, float] = {}
+    seen: dict[float, tuple[float, float]] = {}  # s -> (clearance, displacement bound)
     where = ["", math.inf]
 
-    def at(s: float) -> tuple[Array, float]:
-        """qpos and displacement bound at s (frames; between frames: the joint-space line)."""
+    def measure(s: float) -> float:
+        """Clearance at s (frames; between frames: on the joint-space line)."""
         f = min(int(s), n - 1)
         t = s - f
         if t == 0.0:
-            return Q[f], float(D[f])
-        return Q[f] + t * (Q[f + 1] - Q[f]), float(D[f] + t * step[f])
-
-    def measure(s: float) -> float:
-        d.qpos[:] = at(s)[0]
+            d.qpos[:] = Q[f]
+            disp = float(D[f])
+        else:
+            d.qpos[:] = Q[f] + t * (Q[f + 1] - Q[f])
+            disp = float(D[f] + t * step[f])
         mujoco.mj_kinematics(m, d)
         mujoco.mj_collision(m, d)
         c = cm.cutoff
@@ -239,11 +239,12 @@ def clearance(sim: Simulator, cm: ClearanceModel, tolerance: float) -> Clearance
                 con = d.contact[i]
                 a, b = sorted((cm.labels[con.geom1], cm.labels[con.geom2]))
                 where[:] = [f"{a} / {b}", c]
-        seen[s] = c
+        seen[s] = (c, disp)
         return c
 
     def bound(a: float, b: float) -> float:
-        return (seen[a] + seen[b] - (at(b)[1] - at(a)[1])) / 2.0
+        (ca, da), (cb, db) = seen[a], seen[b]
+        return (ca + cb - (db - da)) / 2.0
 
     moves = [e.t for e in timeline.events if e.kind == "move"]
     idx = [float(f) for f in _sample_frames(timeline.sim_times(), moves, _EVERY)]
@@ -251,7 +252,9 @@ def clearance(sim: Simulator, cm: ClearanceModel, tolerance: float) -> Clearance
     heap = [(bound(a, b), a, b) for a, b in itertools.pairwise(idx)]
     heapq.heapify(heap)
     budget = _BUDGET
-    while heap and heap[0][0] < best - tolerance and budget > 0:
+    # refine where the clearance could be below the best found (only below half the
+    # cutoff: farther clearances are reported, not certified to the tolerance)
+    while heap and heap[0][0] < min(best, cm.cutoff / 2.0) - tolerance and budget > 0:
         _, a, b = heapq.heappop(heap)
         mid = float((int(a) + int(b)) // 2) if b - a > 1 and a == int(a) else (a + b) / 2.0
         best = min(best, measure(mid))

@@ -33,6 +33,7 @@ from workcell.errors import StudyError
 if TYPE_CHECKING:
     from workcell.cell.workcell import Workcell
     from workcell.sim.simulator import Simulator
+    from workcell.study.candidates import Candidate
 
 __all__ = [
     "PART_FIELDS",
@@ -297,6 +298,12 @@ class Study:
                 f"program must be a .wcl file or a function program(sim), got {self.program!r}"
             )
         object.__setattr__(self, "parameters", tuple(params))
+
+    def candidates(self) -> list[Candidate]:
+        """Every candidate, numbered from 0 (see :mod:`workcell.study.candidates`)."""
+        from workcell.study.candidates import candidates
+
+        return candidates(self)
 
     @property
     def size(self) -> int:

@@ -12,10 +12,14 @@ compiled ``MjModel``:
   geoms' own poses are kept and composed, not overwritten);
 - a movable part: its body pose and its free joint's ``qpos0`` (the initial state).
 
-MuJoCo's midphase keeps bounding boxes of the world body's geoms in world coordinates,
-fixed when compiling; a variant that moves a static part turns the midphase off
-(``mjDSBL_MIDPHASE``: every geom pair of the two bodies goes to the narrow phase, which
-finds the same contacts, a little slower) rather than use stale boxes.
+MuJoCo's midphase keeps a tree of bounding boxes per body, made when compiling, in the
+body's inertial frame; the world body's holds the static parts' geoms where they were.
+A variant that moves a static part refits that tree: each node's box is made again as
+MuJoCo makes it (the union of its geoms' boxes, each geom's local box turned and moved by
+the geom's pose), on the same tree. Stale boxes would let the midphase skip pairs that
+touch; turning the midphase off instead is no cure either: the narrow phase then meets
+pairs the midphase keeps from it, such as a part resting on its support, and with the
+simulator's negative contact margins it reports those as overlaps of one tolerance.
 
 The same edits give the model a fresh compile of the moved cell gives (the tests compare
 body and geom poses, contacts and whole runs). The cell object the simulator reads (for
@@ -149,9 +153,50 @@ class Template:
                 if m.nkey:
                     m.key_qpos[:, adr : adr + 7] = m.qpos0[adr : adr + 7]
                 continue
-            m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_MIDPHASE
             D = T @ invert(self.cell.static_parts[p].pose)
             for g in self._static_geoms[p]:
                 G = D @ pose_from_pos_quat(m.geom_pos[g], m.geom_quat[g])
                 _set_pose(m.geom_pos[g], m.geom_quat[g], G)
+        if any(p in self._static_geoms for p in poses):
+            _refit_world_tree(m)
         return cell, dataclasses.replace(self.compiled, model=m)
+
+
+_EPS = 1e-14  # MuJoCo's mjEPS: flat boxes are inflated by it
+
+
+def _refit_world_tree(m: mujoco.MjModel) -> None:
+    """Remake the world body's bounding boxes (bvh_aabb) from its geoms' current poses."""
+    adr = int(m.body_bvhadr[0])
+    if adr < 0:
+        return
+    R_body = np.empty(9)
+    mujoco.mju_quat2Mat(R_body, m.body_iquat[0])
+    R_body = R_body.reshape(3, 3)
+    signs = np.array(
+        [[(v & 1) * 2 - 1, (v >> 1 & 1) * 2 - 1, (v >> 2 & 1) * 2 - 1] for v in range(8)]
+    )
+
+    def leaf(g: int) -> tuple[Array, Array]:
+        R = np.empty(9)
+        mujoco.mju_quat2Mat(R, m.geom_quat[g])
+        corners = m.geom_aabb[g, :3] + signs * m.geom_aabb[g, 3:]
+        world = corners @ R.reshape(3, 3).T + m.geom_pos[g]
+        local = (world - m.body_ipos[0]) @ R_body
+        return local.min(axis=0), local.max(axis=0)
+
+    def refit(node: int) -> tuple[Array, Array]:
+        kids = [int(k) for k in m.bvh_child[adr + node] if k >= 0]
+        if kids:
+            boxes = [refit(k) for k in kids]
+            lo = np.min([b[0] for b in boxes], axis=0)
+            hi = np.max([b[1] for b in boxes], axis=0)
+        else:
+            lo, hi = leaf(int(m.bvh_nodeid[adr + node]))
+        flat = np.abs(hi - lo) < _EPS
+        lo, hi = np.where(flat, lo - _EPS, lo), np.where(flat, hi + _EPS, hi)
+        m.bvh_aabb[adr + node, :3] = (hi + lo) / 2
+        m.bvh_aabb[adr + node, 3:] = (hi - lo) / 2
+        return lo, hi
+
+    refit(0)
