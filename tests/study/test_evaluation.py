@@ -76,7 +76,9 @@ def test_clearance_agrees_with_geom_distance_on_every_frame():
     row = ev.evaluate(Candidate(0, (0.05,)))
     sim = ev.run(Candidate(0, (0.05,)))
     m, d = sim.model, mujoco.MjData(sim.model)
-    robot = [g for g in sim.contacts.geoms_of("puma") if m.geom_bodyid[g] != m.body("puma.link0").id]
+    robot = [
+        g for g in sim.contacts.geoms_of("puma") if m.geom_bodyid[g] != m.body("puma.link0").id
+    ]
     static = [g for g in sim.contacts.colliding if m.geom_bodyid[g] == 0]
     lowest = math.inf
     for q in sim.timeline.qpos():
@@ -96,7 +98,9 @@ def test_pinned_speed_and_override_follow_eq_4_27(speed, override):
     vary = {"puma.speed": [speed]} if speed else {"puma.override": [override]}
     row = _evaluate(Study(cell="joints", vary=vary), speed or override)
     effective = speed or thesis_joints.SPEED * override
-    assert row["cycle_time_s"] == pytest.approx(thesis_joints.expected_sim_time(effective), abs=1e-9)
+    assert row["cycle_time_s"] == pytest.approx(
+        thesis_joints.expected_sim_time(effective), abs=1e-9
+    )
 
 
 def test_joint_limit_margin_of_example_1_is_joint_5_at_90_deg():
@@ -120,7 +124,7 @@ def test_reach_margin_is_the_distance_to_the_reach_sphere(x):
     assert row["feasible"], row["error"]
     shoulder = np.array([x, 0.0, thesis_pick_place.TABLE_TOP + D1])
     p = np.array(sp.TARGET)
-    wrist = p + [0.0, 0.0, TOOL]  # the tool points down
+    wrist = p + np.array([0.0, 0.0, TOOL])  # the tool points down
     u = (p - shoulder) / np.linalg.norm(p - shoulder)
     b = u @ (wrist - shoulder)
     out = -b + math.sqrt(b * b - ((wrist - shoulder) @ (wrist - shoulder) - REACH**2))

@@ -48,7 +48,9 @@ def _same_as_fresh(cell, compiled, q_arm) -> None:
     np.testing.assert_allclose(d1.geom_xmat, d2.geom_xmat, atol=1e-12)
     np.testing.assert_allclose(m.qpos0, fresh.qpos0, atol=1e-12)
     assert c1 == c2
-    if np.array_equal(m.bvh_child, fresh.bvh_child) and np.array_equal(m.bvh_nodeid, fresh.bvh_nodeid):
+    if np.array_equal(m.bvh_child, fresh.bvh_child) and np.array_equal(
+        m.bvh_nodeid, fresh.bvh_nodeid
+    ):
         np.testing.assert_allclose(m.bvh_aabb, fresh.bvh_aabb, atol=1e-12)  # the same tree
     # the simulator's contact model (negative margins) sees the same overlaps
     for model in (m, fresh):
@@ -59,7 +61,9 @@ def _same_as_fresh(cell, compiled, q_arm) -> None:
     assert first == c
 
 
-@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(
     dx=st.floats(-0.2, 0.2),
     dy=st.floats(-0.2, 0.2),
@@ -86,7 +90,7 @@ def test_a_moved_static_part_collides_where_a_fresh_compile_says(pick_place):
     # stage 1 moved onto the cube: the contacts must show it (stale midphase boxes would not)
     over_cube = moved(cell.static_parts["stage_1"].pose, x=0.2, y=-0.25, yaw=0.3)
     variant, compiled = template.place({}, {"stage_1": over_cube})
-    d, pairs = _state(compiled.model, compiled.model.qpos0)
+    _, pairs = _state(compiled.model, compiled.model.qpos0)
     assert any("stage_1" in a + b and "cube" in a + b for a, b, _ in pairs)
     _same_as_fresh(variant, compiled, compiled.model.qpos0[:6])
     # the template itself is untouched

@@ -3,8 +3,9 @@ into the same folder skips what is done.
 
 - ``DIR/study.json``: what the study is (its description and fingerprint, see
   :mod:`workcell.study.prepare`); a re-run of another study into DIR is refused.
-- ``DIR/parts/*.parquet``: rows as they arrive, one small file at least every second of
-  progress (each written to a temp file and renamed: a file is whole or absent).
+- ``DIR/parts/part-*.parquet``: rows as they arrive, one small file at least every second
+  of progress (each written to a hidden temp file and renamed: a file is whole or absent;
+  temp files a killed run left are deleted on the next).
 - ``DIR/results.parquet``: every row so far, one per candidate, sorted by candidate;
   rewritten (atomically, through :func:`workcell.files.atomic_path`) from itself and the
   parts every ``merge_seconds`` and at the end, after which the merged parts are deleted.
@@ -108,8 +109,10 @@ class ResultStore:
                 )
         else:
             atomic_write_text(study, json.dumps({"key": key, "study": info}, indent=2))
+        for tmp in [*out.glob(f".{RESULTS}.*"), *(out / PARTS).glob(".part-*")]:
+            tmp.unlink(missing_ok=True)  # half-written by a killed run
         files = [out / RESULTS] if (out / RESULTS).exists() else []
-        self._parts = sorted((out / PARTS).glob("*.parquet"))
+        self._parts = sorted((out / PARTS).glob("part-*.parquet"))
         for f in files + self._parts:
             try:
                 t = pq.read_table(f)
