@@ -60,7 +60,9 @@ def _xy_plot(rows: list[dict[str, Any]], px: Parameter, py: Parameter, path: Pat
     for (x, y), group in cells.items():
         ok = [r["cycle_time_s"] for r in group if r["feasible"]]
         (good if ok else bad).append((x, y, min(ok) if ok else math.nan))
-    fig = Figure(figsize=(6.4, 5.2))
+    from matplotlib.ticker import MaxNLocator
+
+    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
     ax = fig.add_subplot()
     n_feasible = sum(1 for r in rows if r["feasible"])
     if good:
@@ -86,8 +88,12 @@ def _xy_plot(rows: list[dict[str, Any]], px: Parameter, py: Parameter, path: Pat
     ax.set_title(f"cycle time over the placement: {n_feasible} of {len(rows)} feasible")
     ax.set_aspect("equal" if px.unit == py.unit else "auto", adjustable="datalim")
     ax.grid(True, alpha=0.3, zorder=0)
+    ax.xaxis.set_major_locator(MaxNLocator(6))
+    ax.yaxis.set_major_locator(MaxNLocator(6))
     if good or bad:
-        ax.legend(loc="upper left", fontsize=8, framealpha=0.8)
+        ax.legend(
+            loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8, frameon=False
+        )
     return _save(fig, path)
 
 
@@ -102,7 +108,7 @@ def _histogram(rows: list[dict[str, Any]], path: Path) -> Path:
     from matplotlib.figure import Figure
 
     times = [r["cycle_time_s"] for r in rows if r["feasible"]]
-    fig = Figure(figsize=(6.4, 4.0))
+    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
     ax = fig.add_subplot()
     if times:
         ax.hist(times, bins=min(30, max(5, len(times) // 3)), color="tab:blue", alpha=0.8)
