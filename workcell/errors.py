@@ -12,6 +12,7 @@ __all__ = [
     "GraspError",
     "JointLimitError",
     "KinematicsError",
+    "LimitError",
     "ModelError",
     "ProgramError",
     "ProtocolError",
@@ -73,3 +74,8 @@ class RecordError(WorkcellError):
 
 class StudyError(WorkcellError):
     """A study could not be set up or run (bad parameter, output folder of another study)."""
+
+
+class LimitError(WorkcellError):
+    """Work over a limit of :mod:`workcell.limits` was refused before it started (the
+    message names the limit and how to raise it)."""

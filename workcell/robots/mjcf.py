@@ -10,7 +10,7 @@ reserves it).
 
 Link solids (``robot.geometry``) become, per solid, one visual mesh geom (the exact mesh,
 ``inertia="exact"``, ``density`` kg/m^3, group 2, no contacts) and convex collision geoms
-(group 3, density 0; see :mod:`workcell.robots.meshes` for the pieces), so each body's
+(group 3, density 0; see :mod:`workcell.meshgeoms` for the pieces), so each body's
 mass and inertia are those of its exact meshes. A body without solids keeps a small
 placeholder inertia. A gripper (``robot.gripper``) is a body ``{prefix}{gripper}`` fixed to
 the last link at its mount, with the palm, and two finger bodies on slide joints
@@ -21,7 +21,7 @@ joints' reference and initial value, as the solids are drawn). The tool site sit
 bodies count as the last link).
 
 For physics (the kinematic simulator ignores all of this): collision geoms have stiff
-contacts (``solref`` :data:`CONTACT_SOLREF`, ``solimp`` :data:`CONTACT_SOLIMP`); every
+contacts (``solref`` and ``solimp`` of :mod:`workcell.meshgeoms`); every
 body has ``gravcomp="1"`` (the arm carries its own weight, as a real arm's
 gravity-compensating servos do; a payload is not compensated); every arm joint has an
 ``armature`` (the reflected inertia of a geared motor's rotor, kg m^2 or kg;
@@ -46,32 +46,30 @@ import os
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import mujoco
 import numpy as np
-import trimesh
 from numpy.typing import NDArray
 
 from workcell.errors import GeometryError, ModelError
 from workcell.files import atomic_write_bytes, atomic_write_text
-from workcell.robots.meshes import convex_pieces, stl_bytes
+from workcell.meshgeoms import (
+    MESHDIR,
+    MeshAssets,
+    add_mesh_geoms,
+    collision_meshes,
+    convex_pieces,
+)
 from workcell.robots.robot import Joint, Robot
 from workcell.spatial import invert, is_rigid, quat_from_matrix, rot_x, rot_z, translation
 
 __all__ = [
     "ARMATURE",
     "ARM_DENSITY",
-    "COLLISION_GROUP",
-    "CONTACT_SOLIMP",
-    "CONTACT_SOLREF",
-    "MESHDIR",
     "SERVO_DAMPING",
     "SERVO_FREQUENCY",
     "TOOL_SITE",
-    "VISUAL_GROUP",
-    "add_mesh_geoms",
     "body_name",
     "export_robot",
     "finger_joint_names",
@@ -85,16 +83,9 @@ __all__ = [
 
 TOOL_SITE = "tool"
 ARM_DENSITY = 2700.0  # kg/m^3, aluminium
-VISUAL_GROUP = 2
-COLLISION_GROUP = 3
-MESHDIR = "meshes"
 ARMATURE = 0.02  # kg m^2 (revolute) or kg (prismatic): a small geared motor's reflected rotor
 SERVO_FREQUENCY = 15.0  # Hz: natural frequency of each joint's position servo
 SERVO_DAMPING = 1.0  # damping ratio of each joint's position servo
-CONTACT_SOLREF = (0.004, 1.0)  # s, damping ratio: stiff contacts (MuJoCo clamps to >= 2 dt)
-CONTACT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)  # MuJoCo's default is (0.9, 0.95, 0.001, ...)
-_EXACT = mujoco.mjtMeshInertia.mjMESH_INERTIA_EXACT
-_MESH = mujoco.mjtGeom.mjGEOM_MESH
 
 Array = NDArray[np.float64]
 
@@ -146,36 +137,8 @@ def _frame_in_body(robot: Robot, k: int) -> Array:
     return fixed_part(robot.joints[k - 1], "standard")
 
 
-@dataclass
-class _Meshes:
-    """Mesh assets and unique names while one spec is built."""
-
-    spec: mujoco.MjSpec
-    prefix: str
-    assets: dict[str, bytes] = field(default_factory=dict)
-    names: dict[str, set[str]] = field(default_factory=lambda: {"mesh": set(), "geom": set()})
-
-    def unique(self, name: str, kind: str = "geom") -> str:
-        """``name``, or ``name.2``, ``name.3`` ... when a ``kind`` of that name exists."""
-        taken = self.names[kind]
-        out, k = name, 1
-        while out in taken:
-            k += 1
-            out = f"{name}.{k}"
-        taken.add(out)
-        return out
-
-    def add(self, name: str, mesh: trimesh.Trimesh) -> str:
-        """Register ``mesh`` as asset ``name`` (made unique); return the mesh name."""
-        mname = self.unique(name, "mesh")
-        file = f"{mname}.stl"
-        self.assets[file] = stl_bytes(mesh)
-        self.spec.add_mesh(name=mname, file=file, inertia=_EXACT)
-        return mname
-
-
 def _placed_meshes(
-    robot: Robot, block: str, T: Array, reg: _Meshes, cache: dict[str, tuple[str, list[str]]]
+    robot: Robot, block: str, T: Array, reg: MeshAssets, cache: dict[str, tuple[str, list[str]]]
 ) -> tuple[str, list[str], Array]:
     """(visual mesh, collision meshes, geom pose) of ``block`` placed by T in a body."""
     model = robot.model
@@ -183,12 +146,7 @@ def _placed_meshes(
         if block not in cache:
             pieces, convex = convex_pieces(model, block)
             vis = reg.add(f"{reg.prefix}{block}", model.world_mesh(("block", block)))
-            col = (
-                [vis]
-                if convex
-                else [reg.add(f"{reg.prefix}{block}.hull{i}", p) for i, p in enumerate(pieces)]
-            )
-            cache[block] = (vis, col)
+            cache[block] = (vis, collision_meshes(reg, f"{reg.prefix}{block}", pieces, convex, vis))
         vis, col = cache[block]
         return vis, col, T
     # a scaled, sheared or mirrored placement is baked into new vertices (geom poses are
@@ -196,14 +154,8 @@ def _placed_meshes(
     m = model.world_mesh(("block", block)).copy().apply_transform(T)
     vis = reg.add(f"{reg.prefix}{block}.placed", m)
     pieces, convex = convex_pieces(model, block)
-    if convex:
-        col = [vis]
-    else:
-        col = []
-        for i, p in enumerate(pieces):
-            q = p.copy().apply_transform(T)
-            col.append(reg.add(f"{reg.prefix}{block}.placed.hull{i}", q.convex_hull))
-    return vis, col, np.eye(4)
+    placed = [p.copy().apply_transform(T).convex_hull for p in pieces]
+    return vis, collision_meshes(reg, f"{reg.prefix}{block}.placed", placed, convex, vis), np.eye(4)
 
 
 def _add_solid(
@@ -213,7 +165,7 @@ def _add_solid(
     T: Array,
     colour: tuple[float, ...] | None,
     density: float,
-    reg: _Meshes,
+    reg: MeshAssets,
     cache: dict[str, tuple[str, list[str]]],
 ) -> None:
     """One visual geom (mass carrier) and the collision geoms of a solid, placed by T."""
@@ -231,52 +183,6 @@ def _add_solid(
         density=density,
         rgba=rgba,
     )
-
-
-def add_mesh_geoms(
-    body: mujoco.MjsBody,
-    visuals: list[tuple[str, str]],
-    collisions: list[str],
-    *,
-    collision_prefix: str,
-    pos: list[float],
-    quat: list[float],
-    density: float,
-    rgba: list[float],
-) -> None:
-    """The geoms of one solid in ``body``: visual mesh geoms that carry the mass and no
-    contacts (``visuals`` = (geom name, mesh name) pairs, group 2) and massless collision
-    geoms named ``{collision_prefix}.col{i}`` on the ``collisions`` meshes (group 3, stiff
-    contacts: :data:`CONTACT_SOLREF`, :data:`CONTACT_SOLIMP`). ``density`` in kg/m^3;
-    ``pos``/``quat`` place the meshes in the body (m, wxyz)."""
-    for geom, mesh in visuals:
-        body.add_geom(
-            name=geom,
-            type=_MESH,
-            meshname=mesh,
-            pos=pos,
-            quat=quat,
-            density=density,
-            contype=0,
-            conaffinity=0,
-            group=VISUAL_GROUP,
-            rgba=rgba,
-        )
-    for i, mesh in enumerate(collisions):
-        body.add_geom(
-            name=f"{collision_prefix}.col{i}",
-            type=_MESH,
-            meshname=mesh,
-            pos=pos,
-            quat=quat,
-            density=0.0,
-            contype=1,
-            conaffinity=1,
-            group=COLLISION_GROUP,
-            rgba=[*rgba[:3], 0.5],
-            solref=list(CONTACT_SOLREF),
-            solimp=list(CONTACT_SOLIMP),
-        )
 
 
 def _check_prefix(prefix: str) -> None:
@@ -320,7 +226,7 @@ def robot_spec(
     with_geo = geometry and robot.model is not None and bool(robot.geometry)
     gripper = robot.gripper if with_geo else None
     gripper_blocks = {p.block for p in gripper.geometry} if gripper is not None else set()
-    reg = _Meshes(spec, prefix)
+    reg = MeshAssets(spec, prefix)
     cache: dict[str, tuple[str, list[str]]] = {}
     inertia = [0.4 * mass * 0.05**2] * 3
 
