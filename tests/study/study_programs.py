@@ -53,3 +53,19 @@ TARGET = (0.40, 0.0, 0.55)
 def pick_place(sim) -> None:
     """Example 2's program (for tests that need a function of their own)."""
     thesis_pick_place.program(sim)
+
+
+def slow_joints(sim) -> None:
+    """Example 1's program after 0.1 s of wall time (a study long enough to kill mid-way)."""
+    import time
+
+    time.sleep(0.1)
+    thesis_joints.program(sim)
+
+
+def asks_for_5000_frames(sim) -> None:
+    """Example 1's program, after checking 5,000 frames against the work limits."""
+    from workcell import limits
+
+    limits.check("max_frames", 5000, "this program")
+    thesis_joints.program(sim)

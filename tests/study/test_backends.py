@@ -3,6 +3,9 @@ that kills its worker is retried, then becomes an error row; the others carry on
 
 from __future__ import annotations
 
+import shutil
+import tempfile
+
 import numpy as np
 import pyarrow as pa
 import pytest
@@ -99,11 +102,13 @@ def test_backend_options_are_checked():
 # ---------------------------------------------------------------------------- Ray
 @pytest.fixture(scope="module")
 def local_ray(tmp_path_factory):
-    """A local Ray of 2 CPUs, usage stats off, its files under the test's tmp folder."""
+    """A local Ray of 2 CPUs, usage stats off, its files in the test session's temporary
+    folder (a short path of its own: Ray's socket paths must stay under 108 bytes)."""
     ray = pytest.importorskip("ray")
     from ray import cloudpickle
 
     crash_dir = tmp_path_factory.mktemp("crash")
+    ray_dir = tempfile.mkdtemp(prefix="ray-")
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("RAY_USAGE_STATS_ENABLED", "0")
         mp.setenv("RAY_AUTH_MODE", "disabled")
@@ -113,13 +118,14 @@ def local_ray(tmp_path_factory):
             num_cpus=2,
             include_dashboard=False,
             log_to_driver=False,
-            _temp_dir=str(tmp_path_factory.mktemp("r")),
+            _temp_dir=ray_dir,
         )
         try:
             yield crash_dir
         finally:
             ray.shutdown()
             cloudpickle.unregister_pickle_by_value(sp)
+            shutil.rmtree(ray_dir, ignore_errors=True)
 
 
 @pytest.mark.slow

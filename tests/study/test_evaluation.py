@@ -182,3 +182,16 @@ def test_a_wcl_program_on_a_cell_file_runs_like_the_script_itself(tmp_path):
     row = _evaluate(study, x, y)
     assert row["feasible"], row["error"]
     assert row["cycle_time_s"] == session.sim.sim_time
+
+
+def test_work_limits_where_the_study_is_set_up_apply_in_every_worker():
+    from workcell import limits
+    from workcell.study import run
+
+    study = Study(cell="joints", program=sp.asks_for_5000_frames, vary={"puma.base.x": [0.0]})
+    with limits.using(max_frames=1000):
+        table = run(study, backend="process", workers=1, progress=False)
+    row = table.to_pylist()[0]
+    assert row["error_type"] == "LimitError"
+    assert "over the limit max_frames = 1,000" in row["error"]
+    assert run(study, backend="serial", progress=False).to_pylist()[0]["feasible"]

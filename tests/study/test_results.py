@@ -14,6 +14,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+import study_programs as sp
 
 from workcell.errors import StudyError
 from workcell.study import Study, execute, run
@@ -92,18 +93,24 @@ def test_store_keeps_one_row_per_candidate(tmp_path):
     assert store.table().column("candidate").to_pylist() == [0, 1]
 
 
+KILLED = """
+import sys
+from workcell.study import Study, run
+import study_programs
+study = Study(cell="joints", program=study_programs.slow_joints, vary={"puma.base.x": "0:0.29:30"})
+run(study, sys.argv[1], backend="serial", progress=False, plots=False)
+"""
+
+
 @pytest.mark.slow
 def test_a_killed_study_resumes_and_loses_and_repeats_nothing(tmp_path):
-    """Kill a real ``workcell study`` process mid-study (SIGKILL: no cleanup at all), then
-    run it again: every candidate has exactly one row, the rows written before the kill
-    are kept as they were, and only the others are evaluated."""
-    study = Study(cell="joints", vary={"puma.base.x": "0:0.29:30"}, dt=0.002)
-    args = [
-        sys.executable, "-m", "workcell.cli", "study", "--example", "joints",
-        "--vary", "puma.base.x=0:0.29:30", "--dt", "0.002",
-        "--backend", "serial", "--out", str(tmp_path), "--no-plots",
-    ]  # fmt: skip
-    proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    """Kill a real process mid-study (SIGKILL: no cleanup at all), then run the study
+    again: every candidate has exactly one row, the rows written before the kill are kept
+    as they were, and only the others are evaluated."""
+    study = Study(cell="joints", program=sp.slow_joints, vary={"puma.base.x": "0:0.29:30"})
+    env = {**os.environ, "PYTHONPATH": str(Path(sp.__file__).parent)}
+    args = [sys.executable, "-c", KILLED, str(tmp_path)]
+    proc = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:
         deadline = time.monotonic() + 120
         while not _files(tmp_path) and proc.poll() is None:
@@ -111,9 +118,9 @@ def test_a_killed_study_resumes_and_loses_and_repeats_nothing(tmp_path):
             time.sleep(0.02)
         os.kill(proc.pid, signal.SIGKILL)
     finally:
-        proc.wait()
+        err = proc.communicate()[1].decode()
     before = _on_disk(tmp_path)
-    assert 0 < before.num_rows < 30, "the study was not killed mid-way"
+    assert 0 < before.num_rows < 30, f"the study was not killed mid-way: {err[-2000:]}"
     again = execute(study, tmp_path, backend_name="serial", progress=False, plots=False)
     assert again.resumed == before.num_rows
     assert again.evaluated == 30 - before.num_rows

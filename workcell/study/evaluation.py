@@ -19,6 +19,7 @@ so rows are bit for bit the same whatever the backend and worker count.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
@@ -27,8 +28,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell import limits
 from workcell.cell.workcell import Workcell
 from workcell.errors import CollisionError
+from workcell.limits import DEFAULTS, Limits
 from workcell.sim.contacts import DEFAULT_TOLERANCE
 from workcell.sim.simulator import Simulator
 from workcell.study import metrics
@@ -111,7 +114,8 @@ class StudySimulator(Simulator):
 class Setup:
     """What a worker needs to evaluate a study's candidates (sent once per worker):
     ``key`` the study's fingerprint, the ``cell``, the ``program``, the ``parameters``,
-    the simulation ``mode`` and ``dt`` (s), and the clearance settings."""
+    the simulation ``mode`` and ``dt`` (s), the clearance settings, and the work
+    ``limits`` in force where the study was set up (every worker applies them)."""
 
     key: str
     cell: Workcell
@@ -121,6 +125,7 @@ class Setup:
     dt: float = 0.01
     clearance_cutoff: float = 0.1
     clearance_tolerance: float = 0.0005
+    limits: Limits = DEFAULTS
 
     def columns(self) -> tuple[str, ...]:
         """The result columns: candidate, the parameters, then :data:`RESULT_COLUMNS`."""
@@ -215,12 +220,17 @@ class Evaluator:
 
     def run(self, candidate: Candidate) -> StudySimulator:
         """The candidate's simulator after its program (raises the program's error)."""
-        sim, _ = self.simulator(candidate)
-        self.setup.program.run(sim)
+        with limits.using(**dataclasses.asdict(self.setup.limits)):
+            sim, _ = self.simulator(candidate)
+            self.setup.program.run(sim)
         return sim
 
     def evaluate(self, candidate: Candidate) -> dict[str, Any]:
         """The candidate's row (module doc); never raises for a failing candidate."""
+        with limits.using(**dataclasses.asdict(self.setup.limits)):
+            return self._evaluate(candidate)
+
+    def _evaluate(self, candidate: Candidate) -> dict[str, Any]:
         try:
             sim, cm = self.simulator(candidate)
             self.setup.program.run(sim)

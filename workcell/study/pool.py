@@ -32,7 +32,7 @@ from typing import Any
 
 from workcell.errors import StudyError
 
-__all__ = ["CRASH_MESSAGE", "ProcessPool", "peak_rss_mb"]
+__all__ = ["CRASH_MESSAGE", "ProcessPool", "peak_rss_mb", "stop_fork_server"]
 
 CRASH_MESSAGE = "a worker process died while evaluating this candidate; retried {} time(s)"
 _THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
@@ -84,6 +84,19 @@ def _single_threaded() -> Iterator[None]:
                 os.environ.pop(k, None)
             else:
                 os.environ[k] = v
+
+
+def stop_fork_server() -> None:
+    """Stop this process's fork server and remove its socket folder (``pymp-*`` in the
+    temporary folder), which Python otherwise keeps until the process exits; the next
+    pool starts a new one. For long-lived processes that want them gone (test suites)."""
+    import multiprocessing.forkserver
+    import multiprocessing.util
+
+    multiprocessing.forkserver._forkserver._stop()  # as Python's own tests stop it
+    for finalizer in list(multiprocessing.util._finalizer_registry.values()):
+        if finalizer._callback is multiprocessing.util._remove_temp_dir:
+            finalizer()  # what would run at exit: remove the folder, forget it
 
 
 def _context() -> Any:

@@ -5,7 +5,7 @@
 parameter against the cell (robots and parts by name, robot choices by adding each
 chosen robot once). Its ``key`` is a fingerprint of everything that decides the rows
 (the cell or its file's contents, the program or its script's text, the parameters,
-sample, seed, mode, dt and clearance settings): a re-run into an output folder holding
+sample, seed, mode, dt, clearance settings and work limits): a re-run into an output folder holding
 another study's results is refused, not mixed in.
 """
 
@@ -17,6 +17,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from workcell import limits
 from workcell.cell.workcell import Workcell
 from workcell.errors import StudyError, WorkcellError
 from workcell.study.evaluation import Setup
@@ -100,6 +101,7 @@ def describe(study: Study, setup: Setup, cell_id: dict[str, Any]) -> dict[str, A
         "dt": setup.dt,
         "clearance_cutoff": setup.clearance_cutoff,
         "clearance_tolerance": setup.clearance_tolerance,
+        "limits": dataclasses.asdict(setup.limits),
     }
 
 
@@ -125,6 +127,7 @@ def prepare(study: Study) -> tuple[Setup, dict[str, Any]]:
         dt=dt,
         clearance_cutoff=float(study.clearance_cutoff),
         clearance_tolerance=float(study.clearance_tolerance),
+        limits=limits.current(),
     )
     info = describe(study, setup, cell_id)
     key = hashlib.sha256(json.dumps(info, sort_keys=True).encode()).hexdigest()[:16]
