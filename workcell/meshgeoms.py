@@ -18,9 +18,13 @@ solids into MuJoCo the same way, through this module:
   2. an object, or a boolean *union* block: the pieces of each block or object it is made
      of, placed by its relation (recursively), so a union of convex primitives collides
      exactly;
-  3. anything else (a non-convex sweep, a difference or intersection): the convex hull
-     of the whole solid: conservative (it fills holes and notches) but never lets parts
-     pass through each other.
+  3. anything else (a non-convex sweep, a difference or intersection, an imported
+     mesh): an approximate convex decomposition by CoACD within the error bound
+     ``concavity`` (:mod:`workcell.decompose`; cached on disk by mesh hash), so holes,
+     slots and cavities stay open: a bin holds a part;
+  4. a solid CoACD cannot split (degenerate) collides as its convex hull.
+
+:func:`collision_pieces` also says which rule applied (for ``workcell info``).
 
 Units: metres, kg/m^3.
 """
@@ -33,6 +37,7 @@ import mujoco
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
+from workcell.decompose import DEFAULT_CONCAVITY, decompose
 from workcell.modeller.model import Model
 
 __all__ = [
@@ -41,9 +46,11 @@ __all__ = [
     "CONTACT_SOLREF",
     "MESHDIR",
     "VISUAL_GROUP",
+    "CollisionPieces",
     "MeshAssets",
     "add_mesh_geoms",
     "collision_meshes",
+    "collision_pieces",
     "convex_pieces",
     "is_convex",
     "stl_bytes",
@@ -75,24 +82,54 @@ def is_convex(mesh: trimesh.Trimesh, rel_tol: float = _CONVEX_REL_TOL) -> bool:
     return v > 0 and hull - v <= rel_tol * hull
 
 
-def convex_pieces(model: Model, ref: str | tuple[str, str]) -> tuple[list[trimesh.Trimesh], bool]:
-    """Convex collision pieces of a block or object in its own frame, and whether it is
-    convex (one piece: its own cached world mesh). ``ref``: a block name or
-    ``(level, name)``. See the module doc for the rule."""
+@dataclass(frozen=True)
+class CollisionPieces:
+    """The convex collision pieces of a solid (in its own frame, m) and how they were
+    made: ``method`` "convex" (the solid itself), "exact" (exact convex pieces of the
+    blocks it is made of), "coacd" (CoACD's decomposition somewhere in it, within
+    ``concavity``) or "hull" (the convex hull of a solid that could not be split)."""
+
+    pieces: list[trimesh.Trimesh]
+    method: str
+
+    @property
+    def convex(self) -> bool:
+        """The solid is convex: its one piece is itself."""
+        return self.method == "convex"
+
+
+def collision_pieces(
+    model: Model, ref: str | tuple[str, str], concavity: float = DEFAULT_CONCAVITY
+) -> CollisionPieces:
+    """Convex collision pieces of a block or object (module doc, rules 1-4). ``ref``: a
+    block name or ``(level, name)``; ``concavity``: CoACD's error bound."""
     level, name = ref if isinstance(ref, tuple) else ("block", ref)
     mesh = model.world_mesh((level, name))
     if is_convex(mesh):
-        return [mesh], True
+        return CollisionPieces([mesh], "convex")
     if level == "object" or model.info((level, name)).boolean == "union":
         pieces: list[trimesh.Trimesh] = []
+        methods = set()
         for rel in model.relations((level, name)):
             if rel.target_level not in _COMPOSED:
-                return [mesh.convex_hull], False
-            sub, _ = convex_pieces(model, (rel.target_level, rel.target))
-            pieces.extend(p.copy().apply_transform(rel.transform) for p in sub)
+                return CollisionPieces([mesh.convex_hull], "hull")
+            sub = collision_pieces(model, (rel.target_level, rel.target), concavity)
+            pieces.extend(p.copy().apply_transform(rel.transform) for p in sub.pieces)
+            methods.add(sub.method)
         if pieces:
-            return pieces, False
-    return [mesh.convex_hull], False
+            worst = next((m for m in ("hull", "coacd") if m in methods), "exact")
+            return CollisionPieces(pieces, worst)
+    pieces = decompose(mesh, concavity, label=f"{level} '{name}'")
+    return CollisionPieces(pieces, "coacd" if len(pieces) > 1 else "hull")
+
+
+def convex_pieces(
+    model: Model, ref: str | tuple[str, str], concavity: float = DEFAULT_CONCAVITY
+) -> tuple[list[trimesh.Trimesh], bool]:
+    """Convex collision pieces of a block or object in its own frame, and whether it is
+    convex (one piece: its own cached world mesh); see :func:`collision_pieces`."""
+    c = collision_pieces(model, ref, concavity)
+    return c.pieces, c.convex
 
 
 @dataclass

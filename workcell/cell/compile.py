@@ -5,7 +5,8 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
 - ``ground``: a plane at z = 0;
 - static part ``P``: geoms of the worldbody at the part's pose: ``P.visual`` (the exact
   mesh, ``inertia="exact"``, no contacts, group 2) and ``P.col{i}`` (convex collision
-  pieces, group 3; see :func:`workcell.meshgeoms.convex_pieces`);
+  pieces, group 3; see :func:`workcell.meshgeoms.collision_pieces`: a convex part is its
+  own piece, a non-convex one is split by CoACD within the error bound ``concavity``);
 - movable part ``P``: a body ``P`` at its pose with a free joint ``P.free``, one visual
   mesh geom ``P.visual`` carrying the mass (exact inertia at the part's density) and
   collision geoms ``P.col{i}`` with density 0;
@@ -30,7 +31,7 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
   ``mj_resetDataKeyframe``, before playing: ctrl 0 would drive the arms to q = 0).
 
 Initial joint values live in ``qpos0`` through each joint's ``ref``: the link bodies are
-written at their pose for the initial q (body frame ``placement @ Rz(q0)``) and
+written at their pose for the initial q (body frame ``origin @ M(q0)``, the joint's motion) and
 ``ref = q0``, so MuJoCo's joint value is the robot's joint value (``qpos = q`` gives
 ``fk(q)``) and ``qpos0``, the XML's default pose and ``mj_resetData`` are the initial
 configuration. The exported XML contains no ``<frame>`` element (dm_control 1.0.50's
@@ -49,6 +50,7 @@ import numpy as np
 
 from workcell.cell.workcell import Workcell
 from workcell.checks import is_finite_number
+from workcell.decompose import DEFAULT_CONCAVITY
 from workcell.errors import GeometryError, ModelError
 from workcell.files import check_folder, write_files
 from workcell.meshgeoms import (
@@ -58,7 +60,7 @@ from workcell.meshgeoms import (
     MeshAssets,
     add_mesh_geoms,
     collision_meshes,
-    convex_pieces,
+    collision_pieces,
 )
 from workcell.modeller.model import Model
 from workcell.robots.mjcf import (
@@ -69,7 +71,7 @@ from workcell.robots.mjcf import (
     robot_spec,
     spec_to_xml,
 )
-from workcell.spatial import pose_from_pos_quat, quat_from_matrix, rot_z, translation
+from workcell.spatial import pose_from_pos_quat, quat_from_matrix
 
 __all__ = [
     "DEFAULT_TIMESTEP",
@@ -132,6 +134,7 @@ def _add_part_geoms(
     pose: np.ndarray,
     density: float,
     reg: MeshAssets,
+    concavity: float,
 ) -> None:
     """Mesh assets of a part, its visual (mass-carrying) geoms and collision geoms in ``parent``.
 
@@ -146,8 +149,8 @@ def _add_part_geoms(
     if any(len(mesh.faces) == 0 for _, _, mesh in visuals):  # e.g. an operand moved away
         raise GeometryError(f"part '{name}': {entity[0]} '{entity[1]}' is empty (no faces)")
     meshes = [reg.add(vis, mesh) for vis, _, mesh in visuals]
-    pieces, convex = convex_pieces(model, entity)
-    cols = meshes if convex else collision_meshes(reg, name, pieces, False, meshes[0])
+    col = collision_pieces(model, entity, concavity)
+    cols = meshes if col.convex else collision_meshes(reg, name, col.pieces, False, meshes[0])
     pos, quat = _pos_quat(pose)
     add_mesh_geoms(
         parent,
@@ -165,13 +168,12 @@ def _set_initial_q(child: mujoco.MjSpec, robot, q: np.ndarray) -> None:  # noqa:
     """Write the link bodies at q and set each joint's ``ref`` to q (so qpos0 = q)."""
     for i, jt in enumerate(robot.joints):
         body = child.body(body_name("", i + 1))
-        T = pose_from_pos_quat(body.pos, body.quat)
-        T = T @ translation(0, 0, float(q[i])) if jt.kind == "prismatic" else T @ rot_z(float(q[i]))
+        T = pose_from_pos_quat(body.pos, body.quat) @ jt.motion(float(q[i]))
         body.pos, body.quat = _pos_quat(T)
         child.joint(joint_name(robot, "", i)).ref = float(q[i])
 
 
-def _build(cell: Workcell, timestep: float) -> CompiledCell:
+def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
     if not (is_finite_number(timestep) and timestep > 0):
         raise GeometryError(f"timestep must be a finite number of seconds > 0, got {timestep!r}")
     spec = mujoco.MjSpec()
@@ -194,12 +196,14 @@ def _build(cell: Workcell, timestep: float) -> CompiledCell:
     spec.worldbody.add_light(name="light", pos=[0, 0, 3], dir=[0, 0, -1])
     m = cell.model
     for p in cell.static_parts.values():
-        _add_part_geoms(spec.worldbody, m, p.name, p.entity, p.colour, p.pose, 1000.0, reg)
+        _add_part_geoms(
+            spec.worldbody, m, p.name, p.entity, p.colour, p.pose, 1000.0, reg, concavity
+        )
     for p in cell.movable_parts.values():
         body = spec.worldbody.add_body(name=p.name)
         body.pos, body.quat = _pos_quat(p.pose)
         body.add_freejoint(name=f"{p.name}.free")
-        _add_part_geoms(body, m, p.name, p.entity, p.colour, np.eye(4), p.density, reg)
+        _add_part_geoms(body, m, p.name, p.entity, p.colour, np.eye(4), p.density, reg, concavity)
         out.part_bodies[p.name] = p.name
         out.free_joints[p.name] = f"{p.name}.free"
     for r in cell.robots.values():
@@ -251,13 +255,20 @@ def _build(cell: Workcell, timestep: float) -> CompiledCell:
     return out
 
 
-def compile_cell(cell: Workcell, *, timestep: float = DEFAULT_TIMESTEP) -> CompiledCell:
+def compile_cell(
+    cell: Workcell,
+    *,
+    timestep: float = DEFAULT_TIMESTEP,
+    concavity: float = DEFAULT_CONCAVITY,
+) -> CompiledCell:
     """Build the cell's MjSpec and compile it (a MuJoCo error raises GeometryError).
 
     ``timestep`` (s): the physics timestep written into the model (the kinematic
-    simulator does not use it).
+    simulator does not use it). ``concavity``: the error bound of the convex
+    decomposition of non-convex parts (CoACD's threshold, in (0, 1]; see
+    :mod:`workcell.decompose`).
     """
-    out = _build(cell, timestep)
+    out = _build(cell, timestep, concavity)
     try:
         out.model = m = out.spec.compile()
     except ValueError as exc:
@@ -275,16 +286,17 @@ def export_cell(
     *,
     file_name: str | None = None,
     timestep: float = DEFAULT_TIMESTEP,
+    concavity: float = DEFAULT_CONCAVITY,
 ) -> Path:
     """Write the cell as one MJCF file plus STL meshes in ``out_dir/meshes``; return the XML path.
 
     The XML (default ``"{cell.name}.xml"``) names its meshes relative to itself, so the
     folder loads from any working directory, in plain MuJoCo and dm_control. The cell is
-    compiled (with the physics ``timestep``, s) before anything is written; every file is
-    written atomically.
+    compiled (with the physics ``timestep``, s, and the decomposition bound ``concavity``)
+    before anything is written; every file is written atomically.
     """
     check_folder(out_dir, error=ModelError)  # before the compiling
-    compiled = compile_cell(cell, timestep=timestep)
+    compiled = compile_cell(cell, timestep=timestep, concavity=concavity)
     try:
         xml = spec_to_xml(compiled.spec)
     except ValueError as exc:
