@@ -20,6 +20,7 @@ when it could lead outside it (absolute, ``~``, ``..``, hidden names, symbolic l
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import errno
 import json
@@ -78,12 +79,21 @@ _previous: Any = None
 _installed = False
 
 
-def _on_sigterm(signum: int, frame: Any) -> None:
+def _remove_live() -> None:
+    """Remove the temp files of writes still in progress (a signal, or the interpreter
+    leaving while daemon threads write)."""
     with _live_lock:
         tmps = list(_live)
     for tmp in tmps:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+
+
+atexit.register(_remove_live)
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    _remove_live()
     if callable(_previous):
         _previous(signum, frame)
         return

@@ -387,3 +387,35 @@ def test_the_python_and_node_clients_keep_working_with_tokens_by_default(server)
         env={**os.environ, "WORKCELL_TOKEN": ""},
     )  # fmt: skip
     assert r.returncode == 0, r.stderr  # it read the token file
+
+
+def test_the_security_section_states_what_the_code_does():
+    from pathlib import Path
+
+    from workcell.limits import DEFAULTS
+    from workcell.program import server as srv_module
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "protocol.md").read_text()
+    section = doc.split("## Security", 1)[1].split("\n## ", 1)[0]
+    facts = [
+        f"| listen backlog | {Server.request_queue_size} |",
+        f"| connections served at once | {srv_module.MAX_CONNECTIONS} (`--max-connections N`) |",
+        f"| time to complete the hello | {srv_module.HELLO_TIMEOUT:g} s |",
+        f"{srv_module.IDLE_TIMEOUT:g} s (`--idle-timeout S`)",
+        f"answered ever later ({srv_module.BAD_TOKEN_DELAY:g} s, then",
+        f"{MAX_MESSAGE_BYTES:,} bytes",
+        "`server-PORT.json`",
+        "`$WORKCELL_RUNTIME_DIR`",
+        "mode 0600",
+        "serve --root DIR`",
+        "`--no-token`",
+        f"| `max_facets` | {DEFAULTS.max_facets:,} |",
+        f"| `max_frames_per_command` | {DEFAULTS.max_frames_per_command:,} |",
+        f"| `max_frames` | {DEFAULTS.max_frames:,} |",
+        f"| `max_spill_bytes` | {DEFAULTS.max_spill_bytes >> 30} GiB |",
+        f"| `max_sim_time` | {DEFAULTS.max_sim_time:.0e} s |".replace("e+0", "e"),
+        f"| `max_file_bytes` | {DEFAULTS.max_file_bytes >> 20} MiB |",
+        f"| `max_coordinate` | {DEFAULTS.max_coordinate:.0e} m |".replace("e+0", "e"),
+    ]
+    for fact in facts:
+        assert fact in section, fact

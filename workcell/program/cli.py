@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 from typing import Any
 
@@ -98,6 +99,11 @@ def _serve(args: argparse.Namespace) -> int:
         level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(message)s"
     )
     install_sigterm_cleanup()
+
+    def stop(signum: int, frame: object) -> None:  # SIGTERM stops as Ctrl-C does
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
     token = args.token or os.environ.get("WORKCELL_TOKEN") or None
     make = _start(args)
     make()  # a bad --cell or --mode fails here, not at each client's connection
