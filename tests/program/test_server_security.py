@@ -285,7 +285,7 @@ def test_a_connection_that_never_completes_its_hello_is_closed(tmp_path):
 
 def test_a_reply_over_the_bound_becomes_an_error_reply(server):
     with Client(port=server.port, timeout=60) as c:
-        c.create_sphere(name="s", radius=1.0, m=100, n=100)  # ~6 MB of relations as JSON
+        c.create_sphere(name="s", radius=1.0, m=64, n=32)  # 1.24 MiB of relations as JSON
         c.new_cell(name="c")
         raw_line = None
 
@@ -302,6 +302,7 @@ def test_a_reply_over_the_bound_becomes_an_error_reply(server):
 
 
 # ------------------------------------------------------------------ 3, 4. disconnects, log
+@pytest.mark.slow
 def test_abrupt_disconnects_print_no_traceback_and_the_log_has_a_line_per_connection(tmp_path):
     proc = subprocess.Popen(
         [sys.executable, "-m", "workcell.program.cli", "serve", "--port", "0"],
