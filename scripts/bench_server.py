@@ -32,7 +32,8 @@ EXAMPLES = {
 
 def start_server() -> tuple[subprocess.Popen, int]:
     p = subprocess.Popen(
-        [sys.executable, "-m", "workcell.program.cli", "serve", "--port", "0"],
+        [sys.executable, "-m", "workcell.program.cli", "serve", "--port", "0"]
+        + ["--log-level", "warning"],  # no line per connection in the benchmark's output
         stdout=subprocess.PIPE,
         text=True,
     )
