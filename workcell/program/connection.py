@@ -101,7 +101,7 @@ class Connection(socketserver.StreamRequestHandler):
         self.requests, self.session, self.greeted, self.expired = 0, None, False, False
         t0 = time.monotonic()
         log.info("connection %d from %s:%s opened", self.cid, self.addr, self.client_address[1])
-        timer = threading.Timer(srv.hello_timeout, self._hello_expired)
+        self.timer = timer = threading.Timer(srv.hello_timeout, self._hello_expired)
         timer.daemon = True
         why = "the client went away"
         try:
@@ -125,12 +125,15 @@ class Connection(socketserver.StreamRequestHandler):
     def _linger(self) -> None:
         """Close gently: no more sending, then drop what the client still sends (up to
         1 s, 2 MiB), so it reads the last reply instead of a connection reset."""
+        deadline, dropped = time.monotonic() + 1.0, 0
         with contextlib.suppress(OSError):
             self.connection.shutdown(socket.SHUT_WR)
-            self.connection.settimeout(1.0)
-            for _ in range(32):
-                if not self.connection.recv(65536):
+            while dropped < 2 << 20 and (left := deadline - time.monotonic()) > 0:
+                self.connection.settimeout(left)
+                data = self.connection.recv(65536)
+                if not data:
                     break
+                dropped += len(data)
 
     def _hello_expired(self) -> None:
         if not self.greeted:
@@ -273,6 +276,7 @@ class Connection(socketserver.StreamRequestHandler):
                     "wrong or missing token",
                 )
             srv.throttle.succeeded(self.addr)
+        self.timer.cancel()  # the hello came: making the session may take its time
         if not self.greeted:
             self.session = srv.new_session()
             self.greeted = True
