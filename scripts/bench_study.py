@@ -22,12 +22,15 @@ import os
 import shutil
 import tempfile
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
 
 from workcell.study import Study
-from workcell.study.runner import execute
+from workcell.study.backends import backend
+from workcell.study.prepare import prepare
+from workcell.study.results import ResultStore, schema
 
 
 def study(nx: int, ny: int) -> Study:
@@ -37,10 +40,50 @@ def study(nx: int, ny: int) -> Study:
     )
 
 
-def timed(s: Study, backend: str, workers: int | None = None) -> tuple[float, pa.Table, dict]:
+@dataclass
+class Timing:
+    """One backend's run: the whole time, the time to its first row, its table and
+    its workers' peak memory (MB by pid)."""
+
+    total: float
+    first: float
+    n: int
+    table: pa.Table
+    memory_mb: dict[int, float]
+
+    @property
+    def steady(self) -> float:
+        """Candidates per second after the first row (the start excluded)."""
+        return (self.n - 1) / (self.total - self.first)
+
+
+def timed(s: Study, name: str, workers: int | None = None) -> Timing:
+    setup, info = prepare(s)
+    runner = backend(name, workers=workers)
+    store = ResultStore(None, schema(setup.parameters), info, setup.key)
+    todo = s.candidates()
     t0 = time.perf_counter()
-    out = execute(s, None, backend_name=backend, workers=workers, progress=False)
-    return time.perf_counter() - t0, out.table, out.backend.memory_mb
+    first = None
+    for row in runner.run(setup, todo):
+        store.add([row])
+        if first is None:
+            first = time.perf_counter() - t0
+    total = time.perf_counter() - t0
+    return Timing(total, first or total, len(todo), store.table(), runner.memory_mb)
+
+
+def line(what: str, t: Timing, serial: Timing | None = None, target: float = 0.0) -> str:
+    text = (
+        f"{what:13s} {t.total:6.1f} s  {t.n / t.total:6.2f} cand/s  (first row {t.first:4.1f} s; "
+        f"then {t.steady:6.2f} cand/s)"
+    )
+    if serial is not None:
+        text += (
+            f"\n{'':13s} {serial.total / t.total:.2f}x serial (target >= {target}x), "
+            f"{t.steady / serial.steady:.2f}x after the first row; "
+            f"identical: {same_bits(t.table, serial.table)}"
+        )
+    return text
 
 
 def same_bits(a: pa.Table, b: pa.Table) -> bool:
@@ -74,17 +117,14 @@ def main() -> None:
     print(f"study: example 2, base over a {args.nx} x {args.ny} grid = {n} candidates")
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the start")
 
-    t_serial, serial, mem_serial = timed(s, "serial")
-    feasible = sum(serial.column("feasible").to_pylist())
-    print(f"\nserial:       {t_serial:6.1f} s  {n / t_serial:6.2f} cand/s  ({feasible} feasible)")
-    print(f"  this process's peak memory: {memory(mem_serial)}")
-
-    t_proc, proc, mem_proc = timed(s, "process", 2)
-    print(
-        f"2 processes:  {t_proc:6.1f} s  {n / t_proc:6.2f} cand/s  "
-        f"{t_serial / t_proc:.2f}x serial (target >= 1.7x)  identical: {same_bits(proc, serial)}"
-    )
-    print(f"  workers' peak memory: {memory(mem_proc)}")
+    serial = timed(s, "serial")
+    feasible = sum(serial.table.column("feasible").to_pylist())
+    print(f"({feasible} feasible)\n")
+    print(line("serial:", serial))
+    print(f"{'':13s} this process's peak memory: {memory(serial.memory_mb)}")
+    proc = timed(s, "process", 2)
+    print(line("2 processes:", proc, serial, 1.7))
+    print(f"{'':13s} workers' peak memory: {memory(proc.memory_mb)}")
 
     if not args.no_ray:
         import ray
@@ -96,22 +136,23 @@ def main() -> None:
         ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, _temp_dir=tmp)
         t_init = time.perf_counter() - t0
         try:
-            t_ray, by_ray, mem_ray = timed(s, "ray")
+            by_ray = timed(s, "ray")
         finally:
             ray.shutdown()
             shutil.rmtree(tmp, ignore_errors=True)
+        print(line("Ray, 2 CPUs:", by_ray, serial, 1.5))
         print(
-            f"Ray, 2 CPUs:  {t_ray:6.1f} s  {n / t_ray:6.2f} cand/s  "
-            f"{t_serial / t_ray:.2f}x serial (target >= 1.5x)  identical: {same_bits(by_ray, serial)}"
-            f"  (ray.init {t_init:.1f} s, not counted)"
+            f"{'':13s} Ray workers' peak memory: {memory(by_ray.memory_mb)}; ray.init {t_init:.1f} s (not counted)"
         )
-        print(f"  Ray workers' peak memory: {memory(mem_ray)}")
 
     if args.curve:
         print("\ncandidates/s against process workers (this machine has 2 cores):")
         for w in (1, 2, 3, 4):
-            t, _, _ = timed(s, "process", w)
-            print(f"  {w} worker(s): {n / t:6.2f} cand/s  ({t_serial / t:.2f}x serial)")
+            t = timed(s, "process", w)
+            print(
+                f"  {w} worker(s): {t.n / t.total:6.2f} cand/s, {t.steady:6.2f} after the first row"
+            )
+    print(f"\nload average at the end: {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":
