@@ -50,6 +50,7 @@ class Timing:
     n: int
     table: pa.Table
     memory_mb: dict[int, float]
+    cpu_s: dict[int, float]
 
     @property
     def steady(self) -> float:
@@ -69,13 +70,18 @@ def timed(s: Study, name: str, workers: int | None = None) -> Timing:
         if first is None:
             first = time.perf_counter() - t0
     total = time.perf_counter() - t0
-    return Timing(total, first or total, len(todo), store.table(), runner.memory_mb)
+    return Timing(total, first or total, len(todo), store.table(), runner.memory_mb, runner.cpu_s)
 
 
 def line(what: str, t: Timing, serial: Timing | None = None, target: float = 0.0) -> str:
     text = (
         f"{what:13s} {t.total:6.1f} s  {t.n / t.total:6.2f} cand/s  (first row {t.first:4.1f} s; "
         f"then {t.steady:6.2f} cand/s)"
+    )
+    cpu = sum(t.cpu_s.values())
+    text += (
+        f"\n{'':13s} CPU {1e3 * cpu / t.n:.1f} ms per candidate; the worker(s) had "
+        f"{cpu / t.total:.2f} cores on average"
     )
     if serial is not None:
         text += (

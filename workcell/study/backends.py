@@ -22,6 +22,7 @@ from __future__ import annotations
 import abc
 import os
 import pickle
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -49,12 +50,14 @@ def _batch_size(n: int, workers: int, most: int) -> int:
 
 
 class Backend(abc.ABC):
-    """Runs candidates; ``memory_mb`` maps worker process ids to their peak memory (MB)."""
+    """Runs candidates; ``memory_mb`` maps worker process ids to their peak memory (MB),
+    ``cpu_s`` to the CPU time they spent on candidates (s)."""
 
     name = ""
 
     def __init__(self) -> None:
         self.memory_mb: dict[int, float] = {}
+        self.cpu_s: dict[int, float] = {}
         self.workers = 1
 
     @abc.abstractmethod
@@ -68,8 +71,14 @@ class SerialBackend(Backend):
     name = "serial"
 
     def run(self, setup: Setup, todo: list[Candidate]) -> Iterator[dict[str, Any]]:
-        yield from evaluate_batch(setup, todo)
+        cpu = 0.0
+        for c in todo:  # CPU time of the evaluations only, not of the caller's work
+            t0 = time.process_time()
+            row = next(evaluate_batch(setup, [c]))
+            cpu += time.process_time() - t0
+            yield row
         self.memory_mb[os.getpid()] = peak_rss_mb()
+        self.cpu_s[os.getpid()] = cpu
 
 
 class ProcessBackend(Backend):
@@ -104,13 +113,18 @@ class ProcessBackend(Backend):
             yield from pool.run(todo)
         finally:
             self.memory_mb.update(pool.memory_mb)
+            self.cpu_s.update(pool.cpu_s)
             self.crashes = pool.crashes
 
 
-def _ray_batch(setup: Setup, batch: list[Candidate]) -> tuple[list[dict[str, Any]], int, float]:
-    """A Ray task: the rows of ``batch``, this worker's pid and peak memory (MB)."""
+def _ray_batch(
+    setup: Setup, batch: list[Candidate]
+) -> tuple[list[dict[str, Any]], int, float, float]:
+    """A Ray task: the rows of ``batch``, this worker's pid, peak memory (MB) and the CPU
+    time (s) the batch took."""
+    t0 = time.process_time()
     rows = list(evaluate_batch(setup, batch))
-    return rows, os.getpid(), peak_rss_mb()
+    return rows, os.getpid(), peak_rss_mb(), time.process_time() - t0
 
 
 def import_ray() -> Any:
@@ -178,7 +192,7 @@ class RayBackend(Backend):
                 for r in done:
                     batch = pending.pop(r)
                     try:
-                        rows, pid, mb = ray.get(r)
+                        rows, pid, mb, cpu = ray.get(r)
                     except ray.exceptions.RayError:
                         if len(batch) > 1:  # find the candidate that kills its worker
                             for c in batch:
@@ -189,6 +203,7 @@ class RayBackend(Backend):
                             )
                         continue
                     self.memory_mb[pid] = max(mb, self.memory_mb.get(pid, 0.0))
+                    self.cpu_s[pid] = self.cpu_s.get(pid, 0.0) + cpu
                     yield from rows
         finally:
             if started:

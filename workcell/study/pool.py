@@ -25,6 +25,7 @@ import multiprocessing as mp
 import os
 import pickle
 import signal
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection, wait
@@ -58,7 +59,7 @@ def _worker(conn: Connection, setup_bytes: bytes, environ: dict[str, str]) -> No
 
     ev = evaluator(pickle.loads(setup_bytes))
     ev.template({})  # compile the cell before the first batch
-    conn.send(("ready", os.getpid(), peak_rss_mb()))
+    conn.send(("ready", os.getpid(), peak_rss_mb(), time.process_time()))
     while True:
         try:
             batch = conn.recv()
@@ -68,7 +69,7 @@ def _worker(conn: Connection, setup_bytes: bytes, environ: dict[str, str]) -> No
             return
         for candidate in batch:
             conn.send(("row", ev.evaluate(candidate)))
-        conn.send(("idle", os.getpid(), peak_rss_mb()))
+        conn.send(("idle", os.getpid(), peak_rss_mb(), time.process_time()))
 
 
 @contextlib.contextmanager
@@ -127,6 +128,8 @@ class ProcessPool:
         self.batch_size = batch_size
         self.retries = retries
         self.memory_mb: dict[int, float] = {}  # worker pid -> peak resident memory
+        self.cpu_s: dict[int, float] = {}  # worker pid -> CPU time on candidates (s)
+        self._cpu0: dict[int, float] = {}
         self.crashes = 0
         self._ctx = _context()
 
@@ -197,9 +200,11 @@ class ProcessPool:
                     if kind == "row":
                         w.inflight.popleft()
                         yield rest[0]
-                    else:  # "ready" or "idle"
+                    else:  # "ready" or "idle": pid, memory (MB), CPU time (s)
                         w.ready = True
-                        self.memory_mb[rest[0]] = rest[1]
+                        pid, mb, cpu = rest
+                        self.memory_mb[pid] = mb
+                        self.cpu_s[pid] = cpu - self._cpu0.setdefault(pid, cpu)
             except (EOFError, OSError):
                 dead.append(w)
                 continue
