@@ -20,6 +20,7 @@ rows are the same whatever the backend (see :mod:`workcell.study.evaluation`).
 from __future__ import annotations
 
 import abc
+import contextlib
 import os
 import pickle
 import time
@@ -177,13 +178,13 @@ class RayBackend(Backend):
     def run(self, setup: Setup, todo: list[Candidate]) -> Iterator[dict[str, Any]]:
         ray = import_ray()
         started = self._init(ray)
+        pending: dict[Any, list[Candidate]] = {}
         try:
             cpus = int(ray.cluster_resources().get("CPU", self.workers))
             self.workers = cpus
             size = self.batch_size or _batch_size(len(todo), cpus, 32)
             task = ray.remote(num_cpus=1, max_retries=self.retries)(_ray_batch)
             ref = ray.put(setup)
-            pending = {}
             for i in range(0, len(todo), size):
                 batch = todo[i : i + size]
                 pending[task.remote(ref, batch)] = batch
@@ -206,6 +207,9 @@ class RayBackend(Backend):
                     self.cpu_s[pid] = self.cpu_s.get(pid, 0.0) + cpu
                     yield from rows
         finally:
+            for r in list(pending):
+                with contextlib.suppress(Exception):
+                    ray.cancel(r)  # interrupted: drop what has not run
             if started:
                 ray.shutdown()
 

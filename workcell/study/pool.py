@@ -55,6 +55,13 @@ def _worker(conn: Connection, setup_bytes: bytes, environ: dict[str, str]) -> No
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     os.environ.clear()
     os.environ.update(environ)
+    import threading
+
+    from tqdm import tqdm
+
+    # workers draw no progress bars: a thread lock for tqdm, not its default
+    # multiprocessing one (a semaphore a stopped worker would leave behind)
+    tqdm.set_lock(threading.RLock())
     from workcell.study.evaluation import evaluator
 
     ev = evaluator(pickle.loads(setup_bytes))
@@ -148,6 +155,7 @@ class ProcessPool:
         self._attempts: collections.Counter[int] = collections.Counter()
         self._start_failures = 0
         pool: list[_Worker] = []
+        finished = False
         try:
             try:
                 for _ in range(min(self.workers, len(todo))):
@@ -164,12 +172,13 @@ class ProcessPool:
                 yield from self._receive(pool, None)
                 if self._queue and len(pool) < self.workers:
                     pool.append(self._start())  # in place of a dead one
-        finally:
-            for w in pool:
+            for w in pool:  # done: let the workers end themselves
                 with contextlib.suppress(OSError):
                     w.conn.send(None)
+            finished = True
+        finally:  # interrupted (or a worker that will not end): stopped
             for w in pool:
-                w.process.join(timeout=5)
+                w.process.join(timeout=5 if finished else 0)
                 if w.process.is_alive():
                     w.process.terminate()
                     w.process.join()
