@@ -416,15 +416,32 @@ def ik_batch(
     ref = _reference(robot, q_current, ((6,), (N, 6)))
     if ref is not None:
         ref = np.broadcast_to(ref, (N, 6))
+    Q = np.empty((N, 8, 6))
+    valid = np.empty((N, 8), dtype=bool)
+    for i in range(0, N, _CHUNK):  # chunks keep the temporaries in cache
+        j = min(N, i + _CHUNK)
+        Q[i:j], valid[i:j] = _batch(robot, S, T[i:j], None if ref is None else ref[i:j])
+    return Q, valid
+
+
+_CHUNK = 4096  # poses per step of ik_batch
+
+
+def _batch(
+    robot: Robot, S: _Solver, T: Array, ref: Array | None
+) -> tuple[Array, NDArray[np.bool_]]:
     M = T if S.pre is None else S.pre @ T
     M = M if S.post is None else M @ S.post
     signs, offs = np.array(S.signs), np.array(S.offs)
-    ref_t = (np.zeros((N, 6)) if ref is None else ref) * signs - offs
+    ref_t = (np.zeros((len(T), 6)) if ref is None else ref) * signs - offs
     theta, exists, degenerate = S.solve_batch(S.model, M, ref_t)
     Q = _wrap_pi(signs * (theta + offs))
-    for n in np.flatnonzero(degenerate & exists.any(axis=1)):
-        idx = np.flatnonzero(exists[n])
-        exists[n, idx[~_distinct(Q[n, idx])]] = False
+    rows = np.flatnonzero(degenerate & exists.any(axis=1))
+    if len(rows):  # a slot equal (modulo 2 pi) to an earlier existing slot is dropped
+        Qd, ed = Q[rows], exists[rows]
+        D = np.abs(_wrap_pi(Qd[:, :, None, :] - Qd[:, None, :, :])).max(axis=-1)
+        same = (D < DEDUPE_TOL) & ed[:, None, :] & np.tril(np.ones((8, 8), dtype=bool), k=-1)
+        exists[rows] = ed & ~same.any(axis=2)
     W, ok = robot.wrap_batch(Q, None if ref is None else ref[:, None, :])
     Qw = np.where(ok.all(axis=-1, keepdims=True), W, Q)
     Qw[~exists] = np.nan
