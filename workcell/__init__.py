@@ -19,6 +19,7 @@ from workcell.errors import (
     ProtocolError,
     RecordError,
     RenderError,
+    StudyError,
     UnreachableError,
     WorkcellError,
 )
@@ -48,6 +49,7 @@ __all__ = [
     "Relation",
     "RenderError",
     "Simulator",
+    "StudyError",
     "Surface",
     "Timeline",
     "UnreachableError",

@@ -20,6 +20,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "workcell.record.cli_render",
     "workcell.program.cli",
     "workcell.robots.cli",
+    "workcell.study.cli",
 )
 
 

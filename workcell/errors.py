@@ -18,6 +18,7 @@ __all__ = [
     "ProtocolError",
     "RecordError",
     "RenderError",
+    "StudyError",
     "UnreachableError",
     "WorkcellError",
 ]
@@ -69,6 +70,10 @@ class RenderError(WorkcellError):
 
 class RecordError(WorkcellError):
     """A recording could not be written or streamed (bad path, viewer unreachable)."""
+
+
+class StudyError(WorkcellError):
+    """A study could not be set up or run (bad parameter, output folder of another study)."""
 
 
 class LimitError(WorkcellError):
