@@ -19,6 +19,7 @@ __all__ = ["SUBCOMMAND_MODULES", "check_outputs", "main", "run_command"]
 SUBCOMMAND_MODULES: tuple[str, ...] = (
     "workcell.record.cli_render",
     "workcell.program.cli",
+    "workcell.robots.cli",
     "workcell.study.cli",
 )
 

@@ -6,7 +6,8 @@ part geometry and, by name:
 - static parts: a block or object of the model at a world pose (4x4 rigid, m), coloured;
 - movable parts: the same plus a density (kg/m^3); mass, bounding box and centroid frame
   (the thesis's grasp data) are computed from the geometry, never stored;
-- robots: a :class:`~workcell.robots.Robot` (built-in Puma 260/560, optionally with a
+- robots: a :class:`~workcell.robots.Robot` (a library robot by name,
+  :func:`workcell.robots.library`, or any Robot; optionally with a
   :func:`~workcell.robots.parallel_gripper`) at a world base pose (composed with the
   robot's own ``base``) with initial joint values;
 - cameras: a position, a look-at target and a vertical field of view (deg).
@@ -21,6 +22,7 @@ Saved as versioned JSON (``format: "workcell-cell", version: 1``); the model thr
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import re
@@ -37,7 +39,7 @@ from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, ModelError, WorkcellError
 from workcell.files import atomic_write_text, load_json
 from workcell.modeller.model import MAX_NAME_LENGTH, Model, check_colour
-from workcell.robots import attach_gripper, parallel_gripper, puma260, puma560
+from workcell.robots import attach_gripper, get, library, parallel_gripper
 from workcell.robots.robot import Robot
 from workcell.spatial import as_transform, translation
 
@@ -59,8 +61,9 @@ FORMAT = "workcell-cell"
 VERSION = 1
 DEFAULT_COLOUR = (0.6, 0.6, 0.62, 1.0)
 BUILTIN_ROBOTS: Mapping[str, Callable[[], Robot]] = MappingProxyType(
-    {"puma260": puma260, "puma560": puma560}
+    {name: functools.partial(get, name) for name in library()}
 )
+"""The library robots by name (:func:`workcell.robots.get`), as the cell builds them."""
 GRIPPER_PARAMETERS = (
     "name",
     "max_opening",
@@ -114,8 +117,8 @@ class RobotPlacement:
 
     ``robot`` as built (gripper attached if any); ``base`` (4x4) the world pose of the
     robot's base frame, so the world pose of its tool is ``base @ robot.fk(q)``; ``q``
-    the initial joint values (rad/m). ``builtin`` names the built-in model it came from
-    ("puma260"/"puma560", None for a custom robot) and ``gripper_parameters`` the
+    the initial joint values (rad/m). ``builtin`` names the library robot it came from
+    ("ur5e", "puma260", ...; None for a custom robot) and ``gripper_parameters`` the
     :func:`parallel_gripper` arguments (None: no gripper, or a custom one).
     """
 
@@ -179,10 +182,10 @@ def _vec3(value: object, what: str) -> Array:
 
 
 def build_robot(builtin: str, gripper: Mapping[str, Any] | None) -> Robot:
-    """The built-in robot ``builtin`` with a parallel gripper of ``gripper`` parameters (or none)."""
+    """The library robot ``builtin`` with a parallel gripper of ``gripper`` parameters (or none)."""
     if builtin not in BUILTIN_ROBOTS:
         raise ModelError(f"unknown built-in robot {builtin!r}; known: {', '.join(BUILTIN_ROBOTS)}")
-    robot = BUILTIN_ROBOTS[builtin]()
+    robot = get(builtin)
     if gripper is None:
         return robot
     if not isinstance(gripper, Mapping):
@@ -345,7 +348,8 @@ class Workcell:
         base: ArrayLike | None = None,
         q: ArrayLike | None = None,
     ) -> RobotPlacement:
-        """Add a robot: a built-in name ("puma260", "puma560") or a :class:`Robot`.
+        """Add a robot: a library name (``workcell.robots.library()``: "ur5e", "puma260",
+        "kuka_kr6_r700", ...) or a :class:`Robot`.
 
         ``gripper``: True for the default :func:`parallel_gripper`, a mapping of its
         parameters, or None for none (a ``Robot`` may already carry one). ``base`` (4x4
