@@ -53,6 +53,7 @@ __all__ = [
     "collision_pieces",
     "convex_pieces",
     "is_convex",
+    "mass_inertia",
     "stl_bytes",
 ]
 
@@ -63,6 +64,8 @@ CONTACT_SOLREF = (0.004, 1.0)  # s, damping ratio: stiff contacts (MuJoCo clamps
 CONTACT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)  # MuJoCo's default is (0.9, 0.95, 0.001, ...)
 _CONVEX_REL_TOL = 1e-7
 _EXACT = mujoco.mjtMeshInertia.mjMESH_INERTIA_EXACT
+_CONVEX = mujoco.mjtMeshInertia.mjMESH_INERTIA_CONVEX
+_MIN_VOLUME = 1e-12  # m^3
 _MESH = mujoco.mjtGeom.mjGEOM_MESH
 _COMPOSED = ("block", "object")
 
@@ -155,13 +158,30 @@ class MeshAssets:
         taken.add(out)
         return out
 
-    def add(self, name: str, mesh: trimesh.Trimesh) -> str:
-        """Register ``mesh`` as asset ``name`` (made unique, exact inertia); return the mesh name."""
+    def add(
+        self, name: str, mesh: trimesh.Trimesh, inertia: mujoco.mjtMeshInertia = _EXACT
+    ) -> str:
+        """Register ``mesh`` as asset ``name`` (made unique; exact inertia unless
+        ``inertia`` says otherwise, see :func:`mass_inertia`); return the mesh name."""
         mname = self.unique(name, "mesh")
         file = f"{mname}.stl"
         self.assets[file] = stl_bytes(mesh)
-        self.spec.add_mesh(name=mname, file=file, inertia=_EXACT)
+        self.spec.add_mesh(name=mname, file=file, inertia=inertia)
         return mname
+
+
+def mass_inertia(mesh: trimesh.Trimesh) -> mujoco.mjtMeshInertia | None:
+    """How MuJoCo should take the mass of ``mesh`` (e.g. a visual mesh read from a robot
+    file): exactly when it is closed with a positive volume (MuJoCo's exact inertia needs
+    a closed surface), from its convex hull when it is open (a DAE surface), None when
+    even its hull is flat (it can carry no mass)."""
+    if mesh.is_watertight and mesh.volume > _MIN_VOLUME:
+        return _EXACT
+    try:
+        hull = float(ConvexHull(mesh.vertices).volume)
+    except (QhullError, ValueError):
+        return None
+    return _CONVEX if hull > _MIN_VOLUME else None
 
 
 def collision_meshes(

@@ -1,10 +1,11 @@
-"""Robots (thesis ch. 4.2-4.3): serial chains, the library of built-in arms, grippers, forward and inverse kinematics."""
+"""Robots (thesis ch. 4.2-4.3): serial chains, the library of built-in arms, robots read from URDF and MJCF files, grippers, forward and inverse kinematics."""
 
 from workcell.robots.chain import DH, Joint
 from workcell.robots.gripper import Gripper, GripperPart, attach_gripper, parallel_gripper
 from workcell.robots.library import get, library
 from workcell.robots.puma import puma260, puma560
-from workcell.robots.robot import IKSolution, LinkGeometry, Robot
+from workcell.robots.robot import IKSolution, LinkGeometry, Robot, RobotFile
+from workcell.robots.urdf import from_urdf
 
 __all__ = [
     "DH",
@@ -14,7 +15,9 @@ __all__ = [
     "Joint",
     "LinkGeometry",
     "Robot",
+    "RobotFile",
     "attach_gripper",
+    "from_urdf",
     "get",
     "library",
     "parallel_gripper",

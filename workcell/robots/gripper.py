@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
+import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from workcell import solids, spatial
@@ -46,12 +47,25 @@ _PROFILE_YZ = np.array(
 @dataclass(frozen=True, eq=False)
 class GripperPart:
     """One gripper solid: ``role`` palm, left (+y) or right (-y) finger; ``block`` placed by
-    ``transform`` (4x4, m) in the gripper frame, fingers fully open; RGBA ``colour``."""
+    ``transform`` (4x4, m) in the gripper frame, fingers fully open; RGBA ``colour``.
+
+    A gripper read from a robot file has ``mesh`` parts instead of blocks (``block``
+    None), with ``collision`` pieces and ``collides`` as in
+    :class:`~workcell.robots.robot.LinkGeometry`.
+    """
 
     role: Role
-    block: str
+    block: str | None
     transform: Array
     colour: tuple[float, ...] | None = None
+    mesh: trimesh.Trimesh | None = None
+    collision: tuple[trimesh.Trimesh, ...] = ()
+    collides: bool = True
+
+    def vertices(self, model: Model) -> Array:
+        """The part's vertices (m) in the gripper frame (fingers fully open)."""
+        mesh = self.mesh if self.mesh is not None else model.world_mesh(("block", self.block))
+        return spatial.transform_points(self.transform, mesh.vertices)
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,11 +103,7 @@ class Gripper:
             raise GeometryError(
                 f"gripper '{self.name}': opening must be in [0, {self.max_opening}] m, got {o}"
             )
-        left = self.part("left")
-        V = spatial.transform_points(
-            left.transform, self.model.world_mesh(("block", left.block)).vertices
-        )
-        z = float(V[:, 2].max())
+        z = float(self.part("left").vertices(self.model)[:, 2].max())
         return np.array([[0.0, o / 2, z], [0.0, -o / 2, z]])
 
 
@@ -214,6 +224,11 @@ def attach_gripper(robot: Robot, gripper: Gripper, *, mount: ArrayLike | None = 
         raise ModelError(
             f"robot '{robot.name}' already carries gripper '{robot.gripper.name}'; "
             "attach to the robot without a gripper"
+        )
+    if any(p.block is None for p in gripper.geometry):
+        raise ModelError(
+            f"gripper '{gripper.name}' was read from a robot file and stays with its robot; "
+            "attach a parallel_gripper() instead"
         )
     M = (
         default_mount(robot)

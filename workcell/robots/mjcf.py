@@ -13,8 +13,10 @@ Link solids (``robot.geometry``) become, per solid, one visual mesh geom (the ex
 (group 3, density 0; see :mod:`workcell.meshgeoms` for the pieces), so each body's
 mass and inertia are those of its exact meshes. A mesh entry (``LinkGeometry.mesh``, e.g.
 from a robot description's file) gives its mesh as the visual geom and its own convex
-``collision`` pieces (else its hull) as the collision geoms. A body without solids keeps a small
-placeholder inertia. A gripper (``robot.gripper``) is a body ``{prefix}{gripper}`` fixed to
+``collision`` pieces (else its hull; none when ``collides`` is False) as the collision
+geoms; an open mesh (a DAE surface) carries the mass of its convex hull, a flat one none.
+A body without mass-carrying solids keeps a small placeholder inertia. A gripper read
+from a robot file has mesh parts, placed the same way. A gripper (``robot.gripper``) is a body ``{prefix}{gripper}`` fixed to
 the last link at its mount, with the palm, and two finger bodies on slide joints
 ``{prefix}{gripper}.left_slide`` / ``.right_slide`` (axis +y / -y of the gripper frame,
 range [0, finger_travel] m, q = 0 closed, q = finger_travel fully open, which is the
@@ -62,7 +64,9 @@ from workcell.meshgeoms import (
     add_mesh_geoms,
     collision_meshes,
     convex_pieces,
+    mass_inertia,
 )
+from workcell.robots.gripper import GripperPart
 from workcell.robots.robot import LinkGeometry, Robot
 from workcell.spatial import invert, is_rigid, quat_from_matrix
 
@@ -89,6 +93,7 @@ SERVO_FREQUENCY = 15.0  # Hz: natural frequency of each joint's position servo
 SERVO_DAMPING = 1.0  # damping ratio of each joint's position servo
 
 Array = NDArray[np.float64]
+_SHELL = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
 
 
 def body_name(prefix: str, i: int) -> str:
@@ -166,25 +171,35 @@ def _add_solid(
     )
 
 
-def _add_mesh(body: mujoco.MjsBody, g: LinkGeometry, density: float, reg: MeshAssets) -> None:
-    """A mesh entry of ``robot.geometry``: its visual mesh (mass carrier) and its convex
-    collision pieces (or its hull), placed by ``g.transform`` (baked in when not rigid)."""
+def _add_mesh(
+    body: mujoco.MjsBody,
+    name: str,
+    g: LinkGeometry | GripperPart,
+    density: float,
+    reg: MeshAssets,
+) -> bool:
+    """A mesh entry (of ``robot.geometry`` or of a gripper read from a file): its visual
+    mesh and its convex collision pieces (or its hull; none when ``g.collides`` is
+    False), placed by ``g.transform`` (baked in when not rigid). The visual mesh carries
+    the mass at ``density``: exactly when it is closed, from its hull when it is open (a
+    DAE surface; :func:`~workcell.meshgeoms.mass_inertia`), not at all when flat. Returns
+    whether it carries mass."""
     rgba = list(g.colour) if g.colour is not None else [0.7, 0.7, 0.72, 1.0]
-    name = f"{reg.prefix}link{g.link}.mesh"
-    pieces = list(g.collision) or [g.mesh.convex_hull]
-    T = g.transform
-    if is_rigid(T):
-        vis, P = reg.add(name, g.mesh), T
-    else:
-        vis, P = reg.add(name, g.mesh.copy().apply_transform(T)), np.eye(4)
-        pieces = [p.copy().apply_transform(T).convex_hull for p in pieces]
-    col = collision_meshes(reg, name, pieces, False, vis)
-    pos, quat = _pos_quat(P)
+    pieces = (list(g.collision) or [g.mesh.convex_hull]) if g.collides else []
+    T, mesh = g.transform, g.mesh
+    if not is_rigid(T):
+        mesh, T = g.mesh.copy().apply_transform(T), np.eye(4)
+        pieces = [p.copy().apply_transform(g.transform).convex_hull for p in pieces]
+    inertia = mass_inertia(mesh)
+    vis = reg.add(name, mesh, _SHELL if inertia is None else inertia)
+    col = collision_meshes(reg, name, pieces, False, vis) if pieces else []
+    pos, quat = _pos_quat(T)
     gname = reg.unique(name)
     add_mesh_geoms(
         body, [(gname, vis)], col, collision_prefix=gname, pos=pos, quat=quat,
-        density=density, rgba=rgba,
+        density=density if inertia is not None else 0.0, rgba=rgba,
     )  # fmt: skip
+    return inertia is not None
 
 
 def _check_prefix(prefix: str) -> None:
@@ -227,24 +242,34 @@ def robot_spec(
     spec.modelname = robot.name
     with_geo = geometry and bool(robot.geometry)
     gripper = robot.gripper if with_geo else None
-    gripper_blocks = {p.block for p in gripper.geometry} if gripper is not None else set()
+    gripper_blocks = {p.block for p in gripper.geometry if p.block} if gripper else set()
     reg = MeshAssets(spec, prefix)
     cache: dict[str, tuple[str, list[str]]] = {}
     inertia = [0.4 * mass * 0.05**2] * 3
+
+    def placeholder(body: mujoco.MjsBody) -> None:
+        body.mass, body.inertia, body.explicitinertial = mass, inertia, True
 
     def fill(body: mujoco.MjsBody, k: int) -> None:
         solids = [] if not with_geo else robot.geometry
         mine = [
             g for g in solids if g.link == k and (g.block is None or g.block not in gripper_blocks)
         ]
-        if not mine:
-            body.mass, body.inertia = mass, inertia
-            return
+        massive = False
         for g in mine:
             if g.mesh is not None:
-                _add_mesh(body, g, density, reg)
+                massive |= _add_mesh(body, f"{prefix}link{k}.mesh", g, density, reg)
             else:
                 _add_solid(body, robot, g.block, g.transform, g.colour, density, reg, cache)
+                massive = True
+        if not massive:
+            placeholder(body)
+
+    def add_part(body: mujoco.MjsBody, p: GripperPart) -> bool:
+        if p.mesh is not None:
+            return _add_mesh(body, f"{body.name}.mesh", p, density, reg)
+        _add_solid(body, robot, p.block, p.transform, p.colour, density, reg, cache)
+        return True
 
     bodies: list[tuple[str, int]] = []
     parent = spec.worldbody.add_body(name=body_name(prefix, 0))
@@ -276,9 +301,9 @@ def robot_spec(
         gbody = parent.add_body(name=gname)
         gbody.pos, gbody.quat = _pos_quat(gripper.mount)
         bodies.append((gname, n))
-        for p in gripper.geometry:
-            if p.role == "palm":
-                _add_solid(gbody, robot, p.block, p.transform, p.colour, density, reg, cache)
+        palm = [add_part(gbody, p) for p in gripper.geometry if p.role == "palm"]
+        if not any(palm):
+            placeholder(gbody)
         for role, axis, jname in zip(
             ("left", "right"),
             ([0, 1, 0], [0, -1, 0]),
@@ -294,11 +319,9 @@ def robot_spec(
                 limited=mujoco.mjtLimited.mjLIMITED_TRUE,
                 ref=gripper.finger_travel,
             )
-            parts = [p for p in gripper.geometry if p.role == role]
-            for p in parts:
-                _add_solid(fbody, robot, p.block, p.transform, p.colour, density, reg, cache)
-            if not parts:
-                fbody.mass, fbody.inertia = mass, inertia
+            parts = [add_part(fbody, p) for p in gripper.geometry if p.role == role]
+            if not any(parts):
+                placeholder(fbody)
             bodies.append((fbody.name, n))
         pos, quat = _pos_quat(invert(gripper.mount) @ robot.tool)
         gbody.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)

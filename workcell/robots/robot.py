@@ -30,10 +30,11 @@ if TYPE_CHECKING:
     from workcell.modeller.model import Model
     from workcell.robots.gripper import Gripper
 
-__all__ = ["IKSolution", "Joint", "LinkGeometry", "Robot"]
+__all__ = ["IKSolution", "Joint", "LinkGeometry", "Robot", "RobotFile"]
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * np.pi
+_FILE_FIELDS = frozenset({"joints", "base", "tool", "model", "geometry", "gripper"})
 _FK_CHUNK = 2048  # poses per batched FK step (measured: 1.5M poses/s here against 0.8M unchunked)
 
 
@@ -44,7 +45,8 @@ class LinkGeometry:
     (a closed ``trimesh.Trimesh``, m, e.g. read from a robot description's file) with
     its convex ``collision`` pieces (in the mesh's frame; empty: its convex hull).
     Exactly one of ``block`` and ``mesh`` is given. RGBA ``colour``; ``source`` says
-    where a mesh came from (a file path), for messages and saving.
+    where a mesh came from (a file path), for messages and saving. ``collides`` False
+    makes a mesh visual only (no collision pieces; a robot file's visual-only parts).
     """
 
     link: int
@@ -54,12 +56,29 @@ class LinkGeometry:
     mesh: trimesh.Trimesh | None = None
     collision: tuple[trimesh.Trimesh, ...] = ()
     source: str = ""
+    collides: bool = True
 
     def __post_init__(self) -> None:
         if (self.block is None) == (self.mesh is None):
             raise KinematicsError(
                 f"link {self.link} geometry: give exactly one of a modeller block and a mesh"
             )
+
+
+@dataclass(frozen=True)
+class RobotFile:
+    """Where a robot read from a file came from, so a cell can save and rebuild it.
+
+    ``format`` ``"urdf"`` or ``"mjcf"``; ``path`` the file (absolute); ``sha256`` of its
+    bytes when it was read; ``options`` the import's keyword arguments (JSON values)
+    that rebuild the same robot (:func:`workcell.robots.from_urdf`,
+    :func:`workcell.robots.from_mjcf`).
+    """
+
+    format: str
+    path: str
+    sha256: str
+    options: Mapping[str, object] = field(default_factory=dict)
 
 
 class IKSolution(NamedTuple):
@@ -91,7 +110,10 @@ class Robot:
     whose tool is not set); ``nominal_speed`` (rad/s) is the thesis's robot speed: the
     speed of the joint that moves most in a joint-space motion. ``model`` holds the link
     solids named by ``geometry``; ``source`` cites where the parameters come from. The
-    closed-form IK family (:attr:`ik_family`) is detected from the geometry.
+    closed-form IK family (:attr:`ik_family`) is detected from the geometry. ``file``
+    records the robot file and import options of a robot read from one (a cell saves
+    that instead of the robot; :meth:`with_` drops it when the chain, base, tool or
+    geometry change).
     """
 
     name: str
@@ -104,6 +126,7 @@ class Robot:
     geometry: tuple[LinkGeometry, ...] = ()
     source: str = ""
     gripper: Gripper | None = None
+    file: RobotFile | None = None
 
     def __post_init__(self) -> None:
         put = partial(object.__setattr__, self)  # frozen: derived fields are set once here
@@ -191,7 +214,13 @@ class Robot:
         return self.poses[name].copy()
 
     def with_(self, **changes: object) -> Robot:
-        """A copy with some fields replaced (e.g. ``robot.with_(base=T, name="puma_1")``)."""
+        """A copy with some fields replaced (e.g. ``robot.with_(base=T, name="puma_1")``).
+
+        A robot read from a file no longer is that file's robot once its joints, base,
+        tool, model, geometry or gripper change: the copy's ``file`` is None then.
+        """
+        if "file" not in changes and self.file is not None and _FILE_FIELDS & changes.keys():
+            changes["file"] = None
         return replace(self, **changes)
 
     # ---------------------------------------------------------------- limits
