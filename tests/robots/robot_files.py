@@ -44,7 +44,9 @@ def write_meshes(folder: Path) -> None:
     """meshes/arm.stl (a box), meshes/arm.obj (a cylinder), meshes/ell.stl (an L)."""
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
     trimesh.creation.box(extents=(0.3, 0.06, 0.05)).export(folder / "meshes/arm.stl")
-    trimesh.creation.cylinder(radius=0.04, height=0.2, sections=16).export(folder / "meshes/arm.obj")
+    trimesh.creation.cylinder(radius=0.04, height=0.2, sections=16).export(
+        folder / "meshes/arm.obj"
+    )
     l_shape().export(folder / "meshes/ell.stl")
 
 
@@ -141,3 +143,75 @@ def write(folder: Path, name: str, text: str) -> Path:
 def random_q(robot, n: int, seed: int = 0) -> np.ndarray:
     """``n`` joint vectors uniform in the robot's limits."""
     return np.random.default_rng(seed).uniform(robot.lower, robot.upper, (n, robot.dof))
+
+
+def arm_mjcf(*, mesh: str = "meshes/arm.stl", extra_body: str = "", gripper: bool = True) -> str:
+    """A 5-joint MJCF arm: degrees, default classes, a fixed body inside the chain, a joint
+    ``ref``, a joint ``pos`` off the body origin, an unlimited hinge, a slide, a scaled
+    mesh and primitive geoms (visual-only, colliding, hidden collision), materials, a
+    tool site, two keyframes and (optionally) a parallel gripper with finger slides."""
+    hand = (
+        """
+              <body name="hand" pos="0 0 0.05" euler="0 0 30">
+                <geom type="box" size="0.02 0.05 0.01" rgba="0.2 0.2 0.2 1"/>
+                <body name="finger_l" pos="0 0 0.01">
+                  <joint name="fl" type="slide" axis="0 1 0" range="0 0.03"/>
+                  <geom type="box" size="0.01 0.005 0.02" pos="0 0.006 0.02"/>
+                </body>
+                <body name="finger_r" pos="0 0 0.01" euler="0 0 180">
+                  <joint name="fr" type="slide" axis="0 1 0" range="0 0.03"/>
+                  <geom type="box" size="0.01 0.005 0.02" pos="0 0.006 0.02"/>
+                </body>
+              </body>"""
+        if gripper
+        else ""
+    )
+    return f"""<mujoco model="mjcf_arm">
+  <compiler angle="degree" autolimits="true"/>
+  <default>
+    <joint axis="0 0 1" range="-170 170"/>
+    <default class="visual"><geom contype="0" conaffinity="0" group="2"/></default>
+    <default class="collision"><geom group="3"/></default>
+  </default>
+  <asset>
+    <material name="paint" rgba="0.9 0.4 0.1 1"/>
+    <mesh name="arm" file="{mesh}" scale="1 1 2"/>
+  </asset>
+  <worldbody>
+    <geom name="floor" type="plane" size="2 2 0.1"/>
+    <body name="base" pos="0.1 0.2 0.05" euler="0 0 20">
+      <geom type="cylinder" size="0.1 0.05" material="paint"/>
+      <body name="l1" pos="0 0 0.1">
+        <joint name="j1"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.3" size="0.04" class="visual" rgba="0 0 1 1"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.3" size="0.05" class="collision"/>
+        <body name="l2" pos="0 0.05 0.3" euler="90 0 0">
+          <joint name="j2" ref="30" pos="0.01 0 0"/>
+          <geom type="mesh" mesh="arm" pos="0.15 0 0" class="visual" material="paint"/>
+          <body name="bracket" pos="0.3 0 0" euler="0 20 0">
+            <geom type="sphere" size="0.03"/>
+            <body name="l3">
+              <joint name="j3" type="slide" axis="1 0 0" range="0 0.15" ref="0.02"/>
+              <geom type="box" size="0.05 0.02 0.02"/>
+              <body name="l4" pos="0.1 0 0" euler="-10 30 5">
+                <joint name="j4" axis="0.6 0.8 0" limited="false"/>
+                <geom type="ellipsoid" size="0.03 0.02 0.025"/>
+                <body name="l5" pos="0.05 0 0">
+                  <joint name="j5" axis="0 1 0" range="-90 120"/>
+                  <geom type="cylinder" size="0.02 0.02"/>
+                  <site name="flange" pos="0 0 0.04" euler="0 90 0"/>{hand}
+                </body>
+              </body>
+            </body>
+          </body>
+        </body>
+      </body>
+      {extra_body}
+    </body>
+  </worldbody>
+  <keyframe>
+    <key name="home" qpos="0.1 0.2 0.05 0.3 0.4{" 0.03 0.03" if gripper else ""}"/>
+    <key qpos="0 0.5 0.02 0 0{" 0 0" if gripper else ""}"/>
+  </keyframe>
+</mujoco>
+"""

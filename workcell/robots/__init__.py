@@ -3,6 +3,7 @@
 from workcell.robots.chain import DH, Joint
 from workcell.robots.gripper import Gripper, GripperPart, attach_gripper, parallel_gripper
 from workcell.robots.library import get, library
+from workcell.robots.mjcf_import import from_mjcf
 from workcell.robots.puma import puma260, puma560
 from workcell.robots.robot import IKSolution, LinkGeometry, Robot, RobotFile
 from workcell.robots.urdf import from_urdf
@@ -17,6 +18,7 @@ __all__ = [
     "Robot",
     "RobotFile",
     "attach_gripper",
+    "from_mjcf",
     "from_urdf",
     "get",
     "library",

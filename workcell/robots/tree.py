@@ -303,9 +303,10 @@ def build_robot(
     """The Robot of the chain from ``base`` to ``tip`` (module doc). ``tip`` None: the end
     of the longest chain, and the TCP of a kept gripper as the tool. ``tool`` (4x4) is
     placed in the tip frame (an MJCF site). ``poses``: named joint values by joint name
-    (rad/m; missing joints 0). ``what`` names the file in messages (ModelError)."""
+    (rad/m; missing joints 0). ``source`` gets the chain appended. ``what`` names the
+    file in messages (ModelError)."""
     children = _children(links)
-    hands = _find_hands(links, children) if keep_gripper else []
+    hands = _find_hands(links, children)
     fingers = {f[0] for h in hands for f in h.fingers}
     given_tip = tip is not None
     tip = default_tip(links, base, skip=tuple(fingers)) if tip is None else tip
@@ -330,7 +331,7 @@ def build_robot(
     # the rigid groups: chain link k and what is fixed to it
     heads = [base] + [n for n in path if links[n].joint is not None]
     last_group = dict(_rigid(heads[-1], links, children))
-    hand = next((h for h in hands if h.palm in last_group), None)
+    hand = next((h for h in hands if h.palm in last_group), None) if keep_gripper else None
     palm_group: set[str] = set()
     if hand is not None:
         palm_group = {n for n, _ in _rigid(hand.palm, links, children)}
@@ -343,7 +344,7 @@ def build_robot(
             if n not in palm_group:
                 geometry.extend(_entries(k, Tr, links[n].shapes))
             for c in children[n]:
-                if links[c].movable and c not in on_path and not (hand and c in fingers):
+                if links[c].movable and c not in on_path and c not in fingers:
                     left_out.append(links[c].joint.name if links[c].joint else c)
     gripper = _gripper(hand, links, children, last_group[hand.palm]) if hand else None
     if gripper is not None:
@@ -368,7 +369,7 @@ def build_robot(
             tool=tool_T,
             poses=q_poses,
             geometry=tuple(geometry),
-            source=source,
+            source=f"{source}, chain {base} -> {tip}",
             gripper=gripper,
             file=file,
         )

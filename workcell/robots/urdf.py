@@ -66,7 +66,7 @@ from workcell.meshgeoms import is_convex
 from workcell.robots.chain import Joint
 from workcell.robots.meshfile import joint_speeds, load_mesh, parse_xml, primitive, sha256
 from workcell.robots.robot import Robot, RobotFile
-from workcell.robots.tree import Shape, TreeLink, build_robot, default_tip
+from workcell.robots.tree import Shape, TreeLink, build_robot
 from workcell.spatial import rot_x, rot_y, rot_z, translation
 
 __all__ = ["CONTINUOUS_LIMIT", "from_urdf"]
@@ -357,13 +357,12 @@ def from_urdf(
         "name": name, "gripper": gripper, "geometry": geometry, "concavity": concavity,
     }  # fmt: skip
     robot_name = name or top.get("name") or p.stem
-    end = tip or default_tip(tree, base_link)
     return build_robot(
         tree,
         base=base_link,
         tip=tip,
         name=robot_name,
-        source=f"URDF file '{p.name}' ({base_link} -> {end})",
+        source=f"URDF file '{p.name}'",
         file=RobotFile("urdf", str(doc.path), sha256(data), options),
         keep_gripper=gripper,
         what=doc.what,
