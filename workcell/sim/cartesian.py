@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell.cell.workcell import RobotPlacement
-from workcell.checks import is_finite_number
+from workcell.checks import is_finite_number, quote_angle, quote_length
 from workcell.errors import GeometryError, KinematicsError, ProgramError, UnreachableError
 from workcell.robots.ik_closed import puma_config, puma_ik_report
 from workcell.sim.planning import plan_waypoints
@@ -203,9 +203,11 @@ class CartesianCommands:
         """
         name = self._robot(robot)
         target = world_target(T, "move_straight_line", name)
-        for what, v in (("step", step), ("max_jump", max_jump)):
+        for what, v, quote in (("step", step, quote_length), ("max_jump", max_jump, quote_angle)):
             if not (is_finite_number(v) and v > 0):
-                raise ProgramError(f"move_straight_line '{name}': {what} must be > 0, got {v!r}")
+                raise ProgramError(
+                    f"move_straight_line '{name}': {what} must be > 0, got {quote(v)}"
+                )
         placement = self.cell.robots[name]
         start = self.tool_pose(name)
         q0 = self.joints(name)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from workcell.checks import is_finite_number
+from workcell.checks import is_finite_number, quote_angle, quote_length
 from workcell.errors import GraspError, ProgramError
 from workcell.sim.grasp import PartBox, describe_failure, grasp_candidates
 from workcell.spatial import invert, pos_quat_from_pose
@@ -92,9 +92,12 @@ class GripperCommands:
         name = self._robot(robot)
         self._not_in_block("close_gripper")
         self._gripper_id(name, "close_gripper")
-        for what, v in (("max_distance", max_distance), ("max_angle", max_angle)):
+        for what, v, quote in (
+            ("max_distance", max_distance, quote_length),
+            ("max_angle", max_angle, quote_angle),
+        ):
             if not (is_finite_number(v) and v >= 0):
-                raise ProgramError(f"close_gripper '{name}': {what} must be >= 0, got {v!r}")
+                raise ProgramError(f"close_gripper '{name}': {what} must be >= 0, got {quote(v)}")
         if name in self._holds:
             raise GraspError(f"close_gripper '{name}': already holds '{self._holds[name].part}'")
         gripper = self.cell.robots[name].robot.gripper

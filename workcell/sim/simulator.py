@@ -89,7 +89,7 @@ from tqdm import tqdm
 
 from workcell.cell.compile import CompiledCell, compile_cell
 from workcell.cell.workcell import Workcell
-from workcell.checks import is_finite_number
+from workcell.checks import is_finite_number, quote_angle
 from workcell.errors import (
     CollisionError,
     JointLimitError,
@@ -310,8 +310,8 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         top = float(np.max(self.cell.robots[name].robot.max_speeds))
         if not (is_finite_number(speed) and 0 < float(speed) <= top):
             raise ProgramError(
-                f"set_speed '{name}': speed must be a number in (0, {top:.4g}] rad/s "
-                f"(the fastest joint's limit), got {speed!r}"
+                f"set_speed '{name}': speed must be a number in (0, {quote_angle(top, '/s')}] "
+                f"(the fastest joint's limit), got {quote_angle(speed, '/s')}"
             )
         with self._transaction():
             self._speed[name] = float(speed)
@@ -411,7 +411,7 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         if a.shape != (n,):
             got = f"{a.size} value(s)" if a.ndim == 1 else f"an array of shape {a.shape}"
             raise ProgramError(
-                f"{command} '{name}': {what} must be {n} numbers (rad/m, one per joint), got {got}"
+                f"{command} '{name}': {what} must be {n} joint values (one per joint), got {got}"
             )
         if not np.all(np.isfinite(a)):
             raise ProgramError(f"{command} '{name}': {what} must be finite, got {a.tolist()}")
