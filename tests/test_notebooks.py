@@ -86,8 +86,10 @@ def check_quickstart(out: str) -> None:
     assert _number(out, "bored cube volume:") == pytest.approx(a**3 - _gon(n, r) * a, rel=1e-12)
     assert "grasped: part" in out
     assert "released: part" in out
-    # placed centred on the 100 mm stage at (0.25, 0.25), top 0.4 + 0.08 m: corner frame
-    assert _vector(out, "part frame at (m):") == pytest.approx([0.23, 0.23, 0.48], abs=1e-9)
+    # placed centred on the 100 mm stage at (0.25, 0.25), top 0.4 + 0.08 m: its centroid
+    # half the 40 mm cube above, its frame (a corner) half the cube below and beside that
+    assert _vector(out, "part centroid at (m):") == pytest.approx([0.25, 0.25, 0.50], abs=1e-9)
+    assert _vector(out, "part frame (a corner) at (m):") == pytest.approx([0.23, 0.23, 0.48], abs=1e-9)
 
 
 def check_modeller(out: str) -> None:
@@ -153,8 +155,8 @@ def check_thesis_examples(out: str) -> None:
     assert "grasp 'sphere'" in out
     assert "now carried by 'puma_2'" in out
     assert out.count(" 0 collisions") == 2
-    # cube (40 mm, frame at a corner) centred on stage 1 at (0.24, 0.22), top 0.5 m
-    assert _vector(out, "final cube frame (m):") == pytest.approx([0.22, 0.20, 0.5], abs=1e-6)
+    # cube (40 mm) centred on stage 1 at (0.24, 0.22), top 0.5 m: its centroid 20 mm above
+    assert _vector(out, "final cube centroid (m):") == pytest.approx([0.24, 0.22, 0.52], abs=1e-6)
     # sphere (25 mm radius) on table 2 (top 0.4 m) at (0.62, 0.15)
     assert _vector(out, "final sphere centre (m):") == pytest.approx([0.62, 0.15, 0.425], abs=1e-6)
     assert len(re.findall(r"^\d+ key frames -> ", out, re.M)) == 3

@@ -118,7 +118,7 @@ def _demo_cell(args: argparse.Namespace) -> int:
     if args.example == "joints":
         print("(eq. 4.27: 170 deg / 0.3 rad/s = 9.89 s)")
     for name, pos in out["objects"].items():
-        print(f"{name} ends at ({', '.join(f'{v:.4f}' for v in pos)}) m")
+        print(f"{name}'s centroid ends at ({', '.join(f'{v:.4f}' for v in pos)}) m")
     phys = out.get("physics")
     if phys:
         for robot, t in phys["tracking"].items():

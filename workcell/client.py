@@ -225,7 +225,7 @@ class Client:
         return self.call("summary")
 
     def part_positions(self) -> dict[str, list[float]]:
-        """World position (m) of each movable part."""
+        """World position (m) of each movable part's centroid."""
         return self.call("part_positions")
 
     @property

@@ -119,7 +119,7 @@ def test_demo_pick_place_human(capsys):
     text = capsys.readouterr().out
     assert "grasp 'cube'" in text
     assert "0 collision(s)" in text
-    assert "cube ends at (0.2200, 0.2000, 0.5000) m" in text
+    assert "cube's centroid ends at (0.2400, 0.2200, 0.5200) m" in text  # on stage 1's top centre
 
 
 @pytest.mark.parametrize("mode", MODES)

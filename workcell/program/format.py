@@ -85,7 +85,8 @@ def format_result(command: Command, result: Any, session: Session | None = None)
             f"simulated time {result['sim_time_s']:.6g} s, wall time {result['wall_time_s']:.4g} s, "
             f"{result['frames']} frames, {result['collisions']} collisions"
         ]
-        lines += [f"  {name} at {_nums(p)} m" for name, p in result.get("objects", {}).items()]
+        objects = result.get("objects", {}).items()
+        lines += [f"  {name} centroid at {_nums(p)} m" for name, p in objects]
         return "\n".join(lines)
     if isinstance(command, simc.SimTime):
         return f"{result:.6g} s"
@@ -94,7 +95,8 @@ def format_result(command: Command, result: Any, session: Session | None = None)
     if isinstance(command, simc.Frames):
         return f"{result} frames"
     if isinstance(command, simc.PartPositions):
-        return "\n".join(f"{k} at {_nums(v)} m" for k, v in result.items()) or "no movable parts"
+        text = "\n".join(f"{k} centroid at {_nums(v)} m" for k, v in result.items())
+        return text or "no movable parts"
     if isinstance(command, cmd.Remove):
         return "removed " + ", ".join(result)
     if isinstance(result, dict):

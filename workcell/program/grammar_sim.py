@@ -386,7 +386,7 @@ BRANCHES: dict[str, Node] = {
         lambda v: simc.Summary(), "summary", "simulated and wall time, frames, events"
     ),
     "positions": _query(
-        lambda v: simc.PartPositions(), "positions", "movable parts' positions (m)"
+        lambda v: simc.PartPositions(), "positions", "movable parts' centroids (m)"
     ),
 }
 

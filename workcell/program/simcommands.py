@@ -288,7 +288,7 @@ class Events(Command, wire="events"):
 
 @dataclass(frozen=True)
 class Summary(Command, wire="summary"):
-    """sim_time_s, wall_time_s, frames, events, collisions, objects (part positions, m)."""
+    """sim_time_s, wall_time_s, frames, events, collisions, objects (part centroids, m)."""
 
     def execute(self, session: Session) -> dict[str, Any]:
         return _call(session, "summary")
@@ -296,7 +296,7 @@ class Summary(Command, wire="summary"):
 
 @dataclass(frozen=True)
 class PartPositions(Command, wire="part_positions"):
-    """World position (m) of each movable part, by name."""
+    """World position (m) of each movable part's centroid, by name."""
 
     def execute(self, session: Session) -> dict[str, list[float]]:
         return _call(session, "part_positions")

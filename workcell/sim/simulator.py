@@ -278,8 +278,13 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         return self.timeline.sim_times(), self.timeline.qpos()[:, adr]
 
     def part_positions(self) -> dict[str, list[float]]:
-        """World position (m) of each movable part's body frame, by name."""
-        return {p: self.data.xpos[b].tolist() for p, b in self._part_body.items()}
+        """World position (m) of each movable part's centroid, by name: the point grasps
+        aim at and ``place`` sets down (``part_pose`` gives the part frame's pose)."""
+        d = self.data
+        return {
+            p: (d.xpos[b] + d.xmat[b].reshape(3, 3) @ self._centroids[p]).tolist()
+            for p, b in self._part_body.items()
+        }
 
     def clearance(self, a: str, b: str) -> float:
         """Minimum distance (m) between two things now; negative: penetration depth.
