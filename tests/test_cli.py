@@ -45,3 +45,29 @@ def test_demo_solids_writes_nothing_unasked(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["tmp"]
     assert list(tmp.iterdir()) == []
     assert not (Path(tempfile.gettempdir()) / "thesis_solids.json").exists()
+
+
+def test_joint_by_joint_demo_prints_both_clocks(capsys):
+    """The thesis's clock (eq. 4.27: 170 deg at 0.3 rad/s) beside frames x dt, each named."""
+    import math
+    import re
+
+    assert main(["demo", "joints", "--mode", "joint-by-joint", "--json"]) == 0
+    frames = json.loads(capsys.readouterr().out)["frames"]
+    assert main(["demo", "joints", "--mode", "joint-by-joint"]) == 0
+    text = capsys.readouterr().out
+    thesis = re.search(r"sim time \(thesis clock\)\s+([\d.]+) s", text)
+    steps = re.search(r"frames x dt\s+([\d.]+) s", text)
+    assert thesis and steps, text
+    assert float(thesis.group(1)) == pytest.approx(math.radians(170) / 0.3, abs=1e-3)
+    assert float(steps.group(1)) == pytest.approx((frames - 1) * 0.01, abs=1e-3)
+    assert float(steps.group(1)) > float(thesis.group(1))  # one joint at a time takes longer
+
+
+def test_help_explains_the_joint_by_joint_clock(capsys):
+    with pytest.raises(SystemExit):
+        main(["demo", "--help"])
+    assert "thesis's clock" in " ".join(capsys.readouterr().out.split())
+    from workcell.program.language import help_text
+
+    assert "thesis's clock" in " ".join(help_text(("simulate",)).split())

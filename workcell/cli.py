@@ -115,6 +115,10 @@ def _demo_cell(args: argparse.Namespace) -> int:
         f"\nsimulated time {out['sim_time_s']:.2f} s; {out['frames']} frames at dt = {args.dt:g} s; "
         f"{out['collisions']} collision(s)"
     )
+    if args.mode == "joint-by-joint" and not args.physics:
+        from workcell.program.format import joint_by_joint_clocks
+
+        print(joint_by_joint_clocks(out["sim_time_s"], out["frames"], args.dt))
     if args.example == "joints":
         print("(eq. 4.27: 170 deg / 0.3 rad/s = 9.89 s)")
     for name, pos in out["objects"].items():
@@ -201,7 +205,10 @@ def main(argv: list[str] | None = None) -> int:
         "--mode",
         choices=["path", "joint-by-joint", "playback"],
         default="path",
-        help="simulation mode (thesis 4.4; default path)",
+        help="simulation mode (thesis 4.4; default path). In joint-by-joint mode the joints "
+        "move one after another, a frame every dt, but the simulated time is the thesis's "
+        "clock: each move lasts its largest joint motion / speed, as in path mode, so "
+        "frames x dt is longer than the simulated time (both are printed)",
     )
     demo.add_argument("--dt", type=float, metavar="SECONDS", help="sampling interval (0.01)")
     demo.add_argument("--mjcf", metavar="DIR", help="also export the cell as MJCF to DIR")

@@ -277,7 +277,10 @@ def _simulate(v: dict[str, Any]) -> simc.Simulate:
 _SIMULATE_LEAF = _leaf(
     _simulate,
     "simulate [path|joint-by-joint|playback] [dt T] [realtime]",
-    "start simulating the cell (default path, dt 0.01 s)",
+    "start simulating the cell (default path, dt 0.01 s); in joint-by-joint mode the joints "
+    "move one after another, a frame every dt, while the simulated time is the thesis's "
+    "clock (each move lasts its largest joint motion / speed, as in path mode): 'summary' "
+    "shows both",
     "simulate path dt 0.01",
 )
 _SIMULATE = Keys(

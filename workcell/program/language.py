@@ -18,6 +18,7 @@ check them when they run.
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -168,7 +169,7 @@ def help_text(topic: tuple[str, ...] | list[str] = ()) -> str:
                     ok = ok and find_keyword(word, [key]) == key
                 except ValueError:
                     ok = False
-            if ok:
+            if ok and all(leaf is not other for _, other in chosen):
                 chosen.append((path, leaf))
         if not chosen:
             top = ", ".join(TREE.visible())
@@ -188,7 +189,8 @@ def help_text(topic: tuple[str, ...] | list[str] = ()) -> str:
 
 
 def _explain(leaf: Leaf) -> str:
-    return f"{leaf.syntax}\n    {leaf.summary}\n    example: {leaf.example}"
+    summary = textwrap.fill(leaf.summary, 88, initial_indent="    ", subsequent_indent="    ")
+    return f"{leaf.syntax}\n{summary}\n    example: {leaf.example}"
 
 
 def tokens_of(text: str) -> list[str]:
