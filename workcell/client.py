@@ -1,8 +1,10 @@
 """The Python client of the remote program interface (``workcell serve``, protocol v1).
 
-A :class:`Client` has the Simulator's method names (``set_speed``, ``move_joints_absolute``,
-``move_end_effector``, ``close_gripper``, ``joints``, ``tool_pose``, ``summary``, the
-properties ``robots``, ``frames``, ``sim_time``, ``events`` ...) with the same arguments
+A :class:`Client` has every public method of the Simulator (``set_speed``,
+``move_joints_absolute``, ``move_end_effector``, ``close_gripper``, ``joints``,
+``tool_pose``, ``part_pose``, ``trajectory``, ``summary``, ``concurrently()``, the
+properties ``robots``, ``frames``, ``sim_time``, ``wall_time``, ``events`` ...; a test
+compares the two) with the same arguments
 in SI units (rad, m, s; numpy arrays are sent as lists and joint vectors and poses come
 back as arrays), so one program runs unchanged in-process or remote::
 
@@ -28,6 +30,8 @@ from __future__ import annotations
 import json
 import math
 import socket
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
 from typing import Any
 
 import numpy as np
@@ -42,6 +46,7 @@ from workcell.program.protocol import (
     VERSION,
     encode,
     error_class,
+    to_jsonable,
 )
 from workcell.sim.timeline import Event
 
@@ -53,7 +58,8 @@ _KEEPS_CELL = frozenset(
         "cell_data", "set_speed", "set_mode", "move_joints_absolute", "move_joints_relative",
         "move_end_effector", "move_straight_line", "close_gripper", "open_gripper", "wait",
         "play", "joints", "tool_pose", "held", "clearance", "summary", "part_positions",
-        "robots", "frames", "sim_time", "events", "hello",
+        "robots", "frames", "sim_time", "events", "hello", "part_pose", "gripper_pose",
+        "speed", "trajectory", "wall_time", "concurrently_begin", "concurrently_end",
     }
 )  # fmt: skip
 
@@ -168,8 +174,8 @@ class Client:
         """Switch mode: "path", "joint-by-joint" or "playback"."""
         self.call("set_mode", mode=mode)
 
-    def move_joints_absolute(self, robot: str, q: ArrayLike) -> None:
-        """Move the joints to ``q`` (rad/m)."""
+    def move_joints_absolute(self, robot: str, q: ArrayLike | str) -> None:
+        """Move the joints to ``q`` (rad/m), or to a named pose of the robot ("home")."""
         self.call("move_joints_absolute", robot=robot, q=_list(q))
 
     def move_joints_relative(self, robot: str, dq: ArrayLike) -> None:
@@ -224,6 +230,38 @@ class Client:
         """sim_time_s, wall_time_s, frames, events, collisions, objects, mjcf."""
         return self.call("summary")
 
+    def part_pose(self, part: str) -> NDArray[np.float64]:
+        """A movable part's frame in the world (4x4, m)."""
+        return np.array(self.call("part_pose", part=part), dtype=np.float64)
+
+    def gripper_pose(self, robot: str) -> NDArray[np.float64]:
+        """The robot's gripper body in the world (4x4, m)."""
+        return np.array(self.call("gripper_pose", robot=robot), dtype=np.float64)
+
+    def speed(self, robot: str) -> float:
+        """The robot's speed (rad/s): the speed of the joint that moves most."""
+        return float(self.call("speed", robot=robot))
+
+    def trajectory(self, robot: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(simulated times (N,) s, joint values (N, dof) rad/m) of every frame for one
+        robot (a long run may exceed the protocol's message bound)."""
+        r = self.call("trajectory", robot=robot)
+        t = np.array(r["t"], dtype=np.float64)
+        return t, np.array(r["q"], dtype=np.float64).reshape(len(t), -1)
+
+    @contextmanager
+    def concurrently(self) -> Iterator[None]:
+        """The robots' motion commands inside the block run at the same time (the
+        Simulator's ``concurrently()``); an error inside the block drops the whole block."""
+        self.call("concurrently_begin")
+        try:
+            yield
+        except BaseException:
+            with suppress(WorkcellError):  # the server drops the block (or has lost it)
+                self.call("concurrently_end", commit=False)
+            raise
+        self.call("concurrently_end", commit=True)
+
     def part_positions(self) -> dict[str, list[float]]:
         """World position (m) of each movable part's centroid."""
         return self.call("part_positions")
@@ -242,6 +280,11 @@ class Client:
     def sim_time(self) -> float:
         """The simulated clock (s)."""
         return float(self.call("sim_time"))
+
+    @property
+    def wall_time(self) -> float:
+        """The server simulator's wall clock (s): time spent on commands and replays."""
+        return float(self.call("wall_time"))
 
     @property
     def events(self) -> tuple[Event, ...]:
@@ -267,7 +310,11 @@ class Client:
 
 
 def _list(v: Any) -> Any:
-    """A vector or matrix as nested lists; a target object (dict) as it is."""
-    if isinstance(v, dict):
+    """A vector or matrix as nested lists; a target object (dict) or a name as it is; what
+    is not numbers is sent as it is, for the server to refuse with a ProgramError."""
+    if isinstance(v, (dict, str)):
         return v
-    return np.asarray(v, dtype=np.float64).tolist()
+    try:
+        return np.asarray(v, dtype=np.float64).tolist()
+    except (TypeError, ValueError):
+        return to_jsonable(v)

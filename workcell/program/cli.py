@@ -55,7 +55,7 @@ def _run(args: argparse.Namespace) -> int:
         run_script(args.script, session, echo=args.echo)
     except WorkcellError as exc:
         if session.sim is not None:  # keep what ran, with the error, in the files asked for
-            session.sim.log_error(exc)
+            session.sim._log_error(exc)
             _outputs(args, session.sim)
         raise
     _outputs(args, session.sim)

@@ -90,6 +90,25 @@ _ROBOT = Name("robot", "robot")
 _JOINTS = Vector("q", None, "joints", robot_key="robot", what="joint values (deg)")
 
 
+class JointsOrPose(Node):
+    """After ``move joints absolute ROBOT``: joint values (deg; m for a prismatic joint)
+    or the name of one of the robot's poses (``home``)."""
+
+    pose = Name("q", "pose:robot", what="pose name")
+
+    def expects(self, cur: Cursor) -> list[str]:
+        return [*_JOINTS.expects(cur), *self.pose.expects(cur)]
+
+    def match(self, cur: Cursor) -> None:
+        tok = cur.peek()
+        if tok is None and cur.completing:
+            cur.fail("", self.expects(cur))
+        if tok is not None and tok.kind == "word":
+            self.pose.match(cur)
+        else:
+            _JOINTS.match(cur)
+
+
 def _leaf(build: Any, syntax: str, summary: str, example: str) -> Leaf:
     return Leaf(build, syntax, summary, example)
 
@@ -104,10 +123,11 @@ _MOVE = Keys(
             {
                 "absolute": _robot_leaf(
                     lambda v: simc.MoveJointsAbsolute(v["robot"], v["q"]),
-                    "move joints absolute ROBOT J1 .. Jn [deg|rad]",
-                    "move the joints to these values (deg, or m for a prismatic joint)",
+                    "move joints absolute ROBOT J1 .. Jn [deg|rad] | POSE",
+                    "move the joints to these values (deg, or m for a prismatic joint), or "
+                    "to a named pose of the robot (home)",
                     "move joints absolute puma -60 0 -70 0 90 30",
-                    _JOINTS,
+                    JointsOrPose(),
                 ),
                 "relative": _robot_leaf(
                     lambda v: simc.MoveJointsRelative(v["robot"], v["q"]),

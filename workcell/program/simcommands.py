@@ -30,8 +30,11 @@ __all__ = [
     "MODES",
     "Clearance",
     "CloseGripper",
+    "ConcurrentlyBegin",
+    "ConcurrentlyEnd",
     "Events",
     "Frames",
+    "GripperPose",
     "Held",
     "Joints",
     "MoveEndEffector",
@@ -39,6 +42,7 @@ __all__ = [
     "MoveJointsRelative",
     "MoveStraightLine",
     "OpenGripper",
+    "PartPose",
     "PartPositions",
     "Play",
     "Robots",
@@ -46,10 +50,13 @@ __all__ = [
     "SetSpeed",
     "SimTime",
     "Simulate",
+    "Speed",
     "StopSimulation",
     "Summary",
     "ToolPose",
+    "Trajectory",
     "Wait",
+    "WallTime",
 ]
 
 MODES = ("path", "joint-by-joint", "playback")
@@ -113,15 +120,32 @@ class SetSpeed(Command, wire="set_speed"):
         _call(session, "set_speed", self.robot, self.speed)
 
 
+def _joints_or_pose(v: object, what: str) -> tuple[float, ...] | str:
+    """Joint values (a list of numbers) or the name of one of the robot's poses."""
+    if isinstance(v, str) and v:
+        return v
+    try:
+        return a.vector(v, what)
+    except ProgramError:
+        raise ProgramError(
+            f"{what} must be a list of joint values (rad/m) or a pose name such as "
+            f"'home', got {v!r}"[:200]
+        ) from None
+
+
+_joints_or_pose.label = "number[] | name"  # type: ignore[attr-defined]
+
+
 @dataclass(frozen=True)
 class MoveJointsAbsolute(Command, wire="move_joints_absolute"):
-    """Move a robot's joints to ``q`` (rad/m)."""
+    """Move a robot's joints to ``q`` (rad/m), or to a named pose of the robot ("home")."""
 
     robot: str = arg(a.name)
-    q: tuple[float, ...] = arg(a.vector, doc="rad/m")
+    q: tuple[float, ...] | str = arg(_joints_or_pose, doc="rad/m")
 
     def execute(self, session: Session) -> None:
-        _call(session, "move_joints_absolute", self.robot, np.array(self.q))
+        q = self.q if isinstance(self.q, str) else np.array(self.q)
+        _call(session, "move_joints_absolute", self.robot, q)
 
 
 @dataclass(frozen=True)
@@ -292,6 +316,87 @@ class Summary(Command, wire="summary"):
 
     def execute(self, session: Session) -> dict[str, Any]:
         return _call(session, "summary")
+
+
+@dataclass(frozen=True)
+class PartPose(Command, wire="part_pose"):
+    """World pose (4x4) of a movable part's frame (its centroid: ``part_positions``)."""
+
+    part: str = arg(a.name)
+
+    def execute(self, session: Session) -> np.ndarray:
+        return _call(session, "part_pose", self.part)
+
+
+@dataclass(frozen=True)
+class GripperPose(Command, wire="gripper_pose"):
+    """World pose (4x4) of a robot's gripper body."""
+
+    robot: str = arg(a.name)
+
+    def execute(self, session: Session) -> np.ndarray:
+        return _call(session, "gripper_pose", self.robot)
+
+
+@dataclass(frozen=True)
+class Speed(Command, wire="speed"):
+    """A robot's speed (rad/s): the speed of the joint that moves most."""
+
+    robot: str = arg(a.name)
+
+    def execute(self, session: Session) -> float:
+        return _call(session, "speed", self.robot)
+
+
+@dataclass(frozen=True)
+class Trajectory(Command, wire="trajectory"):
+    """Every frame of one robot: {t: simulated times (s), q: joint values (rad/m), one
+    row per frame}."""
+
+    robot: str = arg(a.name)
+
+    def execute(self, session: Session) -> dict[str, Any]:
+        t, q = _call(session, "trajectory", self.robot)
+        return {"t": t, "q": q}
+
+
+@dataclass(frozen=True)
+class WallTime(Command, wire="wall_time"):
+    """The wall clock (s): time the simulator has spent on commands and replays."""
+
+    def execute(self, session: Session) -> float:
+        return session.require_sim().wall_time
+
+
+@dataclass(frozen=True)
+class ConcurrentlyBegin(Command, wire="concurrently_begin"):
+    """Start a block of motion commands that run at the same time (the Simulator's
+    ``concurrently()``), ended by ``concurrently_end``."""
+
+    def execute(self, session: Session) -> None:
+        sim = session.require_sim()
+        if session.block is not None:
+            raise ProgramError("concurrently_begin: a block is open already; blocks do not nest")
+        block = sim.concurrently()
+        block.__enter__()  # refuses (joint-by-joint mode) before anything changes
+        session.block = (sim, block)
+
+
+@dataclass(frozen=True)
+class ConcurrentlyEnd(Command, wire="concurrently_end"):
+    """End the block: with ``commit`` run its motions together, else drop them all."""
+
+    commit: bool = arg(a.boolean, True)
+
+    def execute(self, session: Session) -> None:
+        if session.block is None:
+            raise ProgramError("concurrently_end: no block is open (concurrently_begin starts one)")
+        (_sim, block), session.block = session.block, None
+        if self.commit:
+            block.__exit__(None, None, None)  # an error undoes the whole block and is raised
+            return
+        stop = ProgramError("the block was abandoned")
+        block.__exit__(ProgramError, stop, None)  # undoes the block
 
 
 @dataclass(frozen=True)

@@ -322,9 +322,18 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
             self._speed[name] = float(speed)
             self.timeline.add_event(self.sim_time, name, "speed", f"speed {float(speed):.6g} rad/s")
 
-    def move_joints_absolute(self, robot: str, q: ArrayLike) -> None:
-        """Move the robot's joints to ``q`` (rad/m) in the simulator's mode."""
+    def move_joints_absolute(self, robot: str, q: ArrayLike | str) -> None:
+        """Move the robot's joints to ``q`` (rad/m), or to one of its named poses
+        (``"home"``), in the simulator's mode."""
         name = self._robot(robot)
+        if isinstance(q, str):
+            poses = self.cell.robots[name].robot.poses
+            if q not in poses:
+                raise ProgramError(
+                    f"move_joints_absolute '{name}': no pose {q!r}; "
+                    f"named poses: {', '.join(poses) or 'none'}"
+                )
+            q = poses[q]
         target = self._vector(name, q, "move_joints_absolute", "q")
         self._move(name, target, "move_joints_absolute")
 
@@ -356,7 +365,7 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
                 self._wall += time.perf_counter() - c0
             self.timeline.add_event(self.sim_time, None, "wait", f"wait {s:.6g} s")
 
-    def log_error(self, exc: BaseException, robot: str | None = None) -> None:
+    def _log_error(self, exc: BaseException, robot: str | None = None) -> None:
         """Note on the timeline that the program stopped on ``exc``: an ``error`` event
         (its type and message) at the current time. The failed command itself changed
         nothing; this is for runners that record or report the run up to the error."""
