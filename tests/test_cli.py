@@ -58,7 +58,8 @@ def test_joint_by_joint_demo_prints_both_clocks(capsys):
     text = capsys.readouterr().out
     thesis = re.search(r"sim time \(thesis clock\)\s+([\d.]+) s", text)
     steps = re.search(r"frames x dt\s+([\d.]+) s", text)
-    assert thesis and steps, text
+    assert thesis, text
+    assert steps, text
     assert float(thesis.group(1)) == pytest.approx(math.radians(170) / 0.3, abs=1e-3)
     assert float(steps.group(1)) == pytest.approx((frames - 1) * 0.01, abs=1e-3)
     assert float(steps.group(1)) > float(thesis.group(1))  # one joint at a time takes longer

@@ -85,6 +85,7 @@ MODULES = [
     "workcell.record",
     "workcell.record.render",
     "workcell.record.gl",
+    "workcell.record.camera",
     "workcell.record.sheets",
     "workcell.record.rerun_log",
     "workcell.record.rr_scene",
