@@ -72,3 +72,21 @@ def test_help_explains_the_joint_by_joint_clock(capsys):
     from workcell.program.language import help_text
 
     assert "thesis's clock" in " ".join(help_text(("simulate",)).split())
+
+
+def test_recordings_keep_60_frames_per_simulated_second_unless_asked(tmp_path, capsys):
+    """A 1 kHz run: --save keeps about 60 frames a second (and every event's frame);
+    --record-fps 0 keeps them all."""
+    import math
+
+    argv = ["demo", "joints", "--dt", "0.001", "--json", "--save"]
+    assert main([*argv, str(tmp_path / "slim.rrd")]) == 0
+    slim = json.loads(capsys.readouterr().out)
+    assert main([*argv, str(tmp_path / "full.rrd"), "--record-fps", "0"]) == 0
+    full = json.loads(capsys.readouterr().out)
+    assert full["rrd_frames"] == full["frames"] > 9000
+    T = slim["sim_time_s"]
+    assert (
+        math.floor(T * 60) + 1 <= slim["rrd_frames"] <= math.floor(T * 60) + 2 + len(slim["events"])
+    )
+    assert slim["rrd_bytes"] < full["rrd_bytes"] / 8

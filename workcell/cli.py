@@ -11,7 +11,7 @@ from pathlib import Path
 
 from workcell.examples import CELL_HELP, CELLS
 
-__all__ = ["SUBCOMMAND_MODULES", "main"]
+__all__ = ["SUBCOMMAND_MODULES", "add_record_fps", "main"]
 
 # Modules that add their own subcommands: each has ``register(sub)``, which adds its
 # parsers to the ``argparse`` subparsers ``sub`` and sets ``func`` (args -> exit code).
@@ -87,10 +87,15 @@ def _demo_cell(args: argparse.Namespace) -> int:
         from workcell.record import record
 
         stats = record(
-            result, args.save, progress=None if args.json else True, images_fps=args.images
+            result,
+            args.save,
+            progress=None if args.json else True,
+            images_fps=args.images,
+            fps=args.record_fps or None,
         )
         out["rrd"] = str(stats.path)
         out["rrd_bytes"] = stats.bytes
+        out["rrd_frames"] = stats.frames
     if args.render:
         from workcell.record import contact_sheet
 
@@ -146,7 +151,10 @@ def _demo_cell(args: argparse.Namespace) -> int:
         )
     if out.get("rrd"):
         mb = (out.get("rrd_bytes") or 0) / 1e6
-        print(f"recording written to {out['rrd']} ({mb:.1f} MB; open it with: rerun {out['rrd']})")
+        print(
+            f"recording written to {out['rrd']} ({mb:.1f} MB, {out['rrd_frames']} of "
+            f"{out['frames']} frames; open it with: rerun {out['rrd']})"
+        )
     if out.get("png"):
         print(f"picture written to {out['png']}")
     return 0
@@ -185,6 +193,18 @@ def _export_cell(args: argparse.Namespace) -> int:
     return 0
 
 
+def add_record_fps(parser: argparse.ArgumentParser) -> None:
+    """The ``--record-fps`` option of the commands that record (``--save``)."""
+    parser.add_argument(
+        "--record-fps",
+        type=float,
+        default=60.0,
+        metavar="HZ",
+        help="with --save: frames per simulated second in the recording (default 60; every "
+        "event keeps its exact frame; 0: every frame of the timeline)",
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``workcell`` command."""
     from workcell import __version__
@@ -220,6 +240,7 @@ def main(argv: list[str] | None = None) -> int:
         metavar="FILE",
         help="solids: save the model (JSON) to FILE; cells: record the run to FILE.rrd",
     )
+    add_record_fps(demo)
     demo.add_argument(
         "--images",
         type=float,

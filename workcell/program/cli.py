@@ -77,8 +77,11 @@ def _outputs(args: argparse.Namespace, sim: Any) -> None:
     if args.save:
         from workcell.record import record
 
-        stats = record(sim, args.save)
-        print(f"recording written to {stats.path} (open it with: rerun {stats.path})")
+        stats = record(sim, args.save, fps=args.record_fps or None)
+        print(
+            f"recording written to {stats.path} ({stats.frames} of {sim.frames} frames; "
+            f"open it with: rerun {stats.path})"
+        )
     if args.render:
         from workcell.record import contact_sheet
 
@@ -141,6 +144,9 @@ def register(sub: Any) -> None:
         "--summary", action="store_true", help="print the simulation's summary as JSON at the end"
     )
     run.add_argument("--save", metavar="FILE.rrd", help="record the run (also up to an error)")
+    from workcell.cli import add_record_fps
+
+    add_record_fps(run)
     run.add_argument("--render", metavar="FILE.png", help="a contact sheet of the run's key frames")
     run.set_defaults(func=_run)
 
