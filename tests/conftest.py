@@ -17,6 +17,8 @@ from pathlib import Path
 
 import pytest
 
+from workcell.decompose import CACHE_ENV
+
 _KEY = "WORKCELL_TEST_TMPDIR"
 
 
@@ -52,3 +54,15 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
             reporter.ensure_newline()
             reporter.write_line(f"ERROR: {message}", red=True)
         session.exitstatus = pytest.ExitCode.TESTS_FAILED
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _coacd_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Convex decompositions go to a temporary cache, never the user's (one per worker)."""
+    old = os.environ.get(CACHE_ENV)
+    os.environ[CACHE_ENV] = str(tmp_path_factory.mktemp("coacd"))
+    yield
+    if old is None:
+        del os.environ[CACHE_ENV]
+    else:
+        os.environ[CACHE_ENV] = old

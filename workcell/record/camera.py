@@ -21,10 +21,11 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell.meshgeoms import COLLISION_GROUP
+
 __all__ = ["AZIMUTH_STEP", "hidden_parts", "overview_camera", "visual_points"]
 
 AZIMUTH_STEP = 30.0  # deg between the azimuths tried
-_COLLISION_GROUP = 3  # collision pieces are in group 3 and never drawn
 _MOVABLE_WEIGHT = 10  # a hidden movable part costs as much as ten static ones
 Array = NDArray[np.float64]
 _SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
@@ -32,7 +33,7 @@ _SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-
 
 def _visible_geoms(model: mujoco.MjModel) -> NDArray[np.intp]:
     keep = (
-        (model.geom_group < _COLLISION_GROUP)
+        (model.geom_group < COLLISION_GROUP)
         & (model.geom_type != mujoco.mjtGeom.mjGEOM_PLANE)
         & (model.geom_rgba[:, 3] > 0)
     )
@@ -78,7 +79,7 @@ def hidden_parts(model: mujoco.MjModel, data: mujoco.MjData, eye: Array) -> tupl
     if len(parts) == 0 or not robot.any():
         return 0, 0
     groups = np.zeros(6, np.uint8)
-    groups[:_COLLISION_GROUP] = 1
+    groups[:COLLISION_GROUP] = 1
     hit = np.zeros(1, np.int32)
     counts = [0, 0]
     for g, points in zip(parts, _box_points(model, data, parts, 0.8), strict=True):
