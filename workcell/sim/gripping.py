@@ -179,10 +179,13 @@ class GripperCommands:
                 others = self._holders[hold.part]
                 to = f", now carried by '{others[0]}'" if others else ""
                 where = ", ".join(
-                    f"{round(v, 4) + 0.0:.4f}" for v in self.part_pose(hold.part)[:3, 3]
+                    f"{round(v, 4) + 0.0:.4f}" for v in self.part_positions()[hold.part]
                 )
                 self.timeline.add_event(
-                    self.sim_time, name, "release", f"release '{hold.part}' at ({where}) m{to}"
+                    self.sim_time,
+                    name,
+                    "release",
+                    f"release '{hold.part}' with its centroid at ({where}) m{to}",
                 )
         return None if hold is None else hold.part
 

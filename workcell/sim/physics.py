@@ -261,8 +261,11 @@ class _Run:
                 opened = self.plan.at(np.array([t]))[0][0]  # the fingers' planned opening
                 acts = self.finger_act[g.robot]
                 self.pending.append((g.robot, g.part, self.act_adr[acts], opened[acts]))
-                where = ", ".join(f"{v:.4g}" for v in d.qpos[adr : adr + 3])
-                detail = f"release '{g.part}' at ({where}) m"
+                centroid = np.empty(3)  # the part frame's centroid offset, turned to the world
+                offset = self.sim.cell.centroid_frame(g.part)[:3, 3]
+                mujoco.mju_rotVecQuat(centroid, offset, d.qpos[adr + 3 : adr + 7])
+                where = ", ".join(f"{v:.4g}" for v in d.qpos[adr : adr + 3] + centroid)
+                detail = f"release '{g.part}' with its centroid at ({where}) m"
             self._event(t, g.robot, g.kind, detail)
 
     def _reopen(self) -> None:
