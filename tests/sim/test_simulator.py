@@ -479,7 +479,7 @@ def test_a_release_event_says_where_the_centroid_was_set_down():
 
     sim = pp.run("path", 0.01)
     (release,) = [e for e in sim.events if e.kind == "release"]
-    found = re.search(r"with its centroid at \(([^)]*)\) m", release.detail)
+    found = re.search(r": centroid \(([^)]*)\) m", release.detail)
     assert found, release.detail
     where = [float(v) for v in found.group(1).split(",")]
     on_stage = [*pp.STAGE_1_CENTRE, pp.STAGE_1_TOP + pp.CUBE_SIZE / 2]  # cube on stage 1

@@ -128,7 +128,7 @@ def _joints_or_pose(v: object, what: str) -> tuple[float, ...] | str:
         return a.vector(v, what)
     except ProgramError:
         raise ProgramError(
-            f"{what} must be a list of joint values (rad/m) or a pose name such as "
+            f"{what} must be a list of numbers (joint values, rad/m) or a pose name such as "
             f"'home', got {v!r}"[:200]
         ) from None
 

@@ -25,6 +25,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell import limits
 from workcell.cell.workcell import RobotPlacement
 from workcell.checks import is_finite_number, quote_angle, quote_length
 from workcell.errors import GeometryError, KinematicsError, ProgramError, UnreachableError
@@ -134,6 +135,8 @@ def line_waypoints(
     length = float(np.linalg.norm(p1 - p0))
     angle = angle_between(T_start[:3, :3], T_goal[:3, :3])
     n = max(1, math.ceil(length / step - 1e-9), math.ceil(angle / _ANGLE_STEP - 1e-9))
+    # each sample becomes at least one frame: refused before anything is allocated
+    limits.check("max_frames_per_command", n, f"a {length:.6g} m line sampled every {step:g} m")
     s = np.arange(1, n + 1) / n
     poses = np.repeat(np.eye(4)[None], n, axis=0)
     poses[:, :3, :3] = _slerp(T_start[:3, :3], T_goal[:3, :3], s)

@@ -185,7 +185,7 @@ class GripperCommands:
                     self.sim_time,
                     name,
                     "release",
-                    f"release '{hold.part}' with its centroid at ({where}) m{to}",
+                    f"release '{hold.part}': centroid ({where}) m{to}",
                 )
         return None if hold is None else hold.part
 

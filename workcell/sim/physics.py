@@ -265,7 +265,7 @@ class _Run:
                 offset = self.sim.cell.centroid_frame(g.part)[:3, 3]
                 mujoco.mju_rotVecQuat(centroid, offset, d.qpos[adr + 3 : adr + 7])
                 where = ", ".join(f"{v:.4g}" for v in d.qpos[adr : adr + 3] + centroid)
-                detail = f"release '{g.part}' with its centroid at ({where}) m"
+                detail = f"release '{g.part}': centroid ({where}) m"
             self._event(t, g.robot, g.kind, detail)
 
     def _reopen(self) -> None:
