@@ -134,6 +134,9 @@ def line_waypoints(
     p0, p1 = T_start[:3, 3], T_goal[:3, 3]
     length = float(np.linalg.norm(p1 - p0))
     angle = angle_between(T_start[:3, :3], T_goal[:3, :3])
+    limits.check(
+        "max_frames_per_command", length / step, f"a {length:.4g} m line sampled every {step:g} m"
+    )
     n = max(1, math.ceil(length / step - 1e-9), math.ceil(angle / _ANGLE_STEP - 1e-9))
     # each sample becomes at least one frame: refused before anything is allocated
     limits.check("max_frames_per_command", n, f"a {length:.6g} m line sampled every {step:g} m")
