@@ -174,8 +174,8 @@ def test_pick_and_place_from_a_saved_cell_through_workcell_run(name, tmp_path, c
     assert main(["run", str(script), "--summary"]) == 0
     out = capsys.readouterr().out
     summary = json.loads(out[out.index("{") :])
-    cube = np.array(summary["objects"]["cube"])  # the part frame: a corner of the cube
-    np.testing.assert_allclose(cube + np.array([0.02, 0.02, 0.0]), stage_top, atol=2e-3)
+    cube = np.array(summary["objects"]["cube"])  # the cube's centroid, 20 mm above the top
+    np.testing.assert_allclose(cube - np.array([0.0, 0.0, 0.02]), stage_top, atol=2e-3)
     kinds = [e["kind"] for e in summary["events"]]
     assert "grasp" in kinds
     assert "release" in kinds
