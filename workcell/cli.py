@@ -83,8 +83,8 @@ def _demo_solids(args: argparse.Namespace) -> int:
             f"\nunit cube: one surface 'square1' pointed to {sq.pointed_by} times "
             f"(cube1 x6, para_block x6 by instancing)"
         )
-        where = f"saved to {out}" if out else "written as JSON (in memory; --save FILE keeps it)"
-        print(f"model {where}; load gives an identical model: {same}")
+        where = f"saved to {out}" if out else "saved as JSON in memory (--save FILE writes it)"
+        print(f"model {where}; loading it gives an identical model: {same}")
         print(f"built, meshed and measured in {elapsed:.2f} s")
     return 0 if same and all(r.valid for r in rows) else 1
 
