@@ -220,15 +220,19 @@ def test_errors_quote_values_in_the_units_people_type():
         "close gripper puma angle -5",
         "move straight puma offset 0 0 -0.05 step -2 mm",
         "move joints absolute puma 0 0 -90 0 90",
+        "simulate stop",
+        "add robot r2 puma260 q 90 0",
     ]
     rc, _, err = shell("\n".join(lines) + "\n", s)
     assert rc == 1
     errors = err.splitlines()
-    assert len(errors) == 4, err
+    assert len(errors) == 5, err
     assert "got 600 deg/s" in errors[0]
     assert "577 deg/s" in errors[0]
     assert "got -5 deg" in errors[1]
     assert "got -2 mm" in errors[2]
     assert "rad" not in errors[3]
+    assert "1.57" not in errors[4]  # not the 90 deg typed, in radians
+    assert "got 2 value(s)" in errors[4]
     for e in errors:  # never a bare radian value
         assert "rad" not in e or "deg" in e, e

@@ -316,7 +316,7 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         top = float(np.max(self.cell.robots[name].robot.max_speeds))
         if not (is_finite_number(speed) and 0 < float(speed) <= top):
             raise ProgramError(
-                f"set_speed '{name}': speed must be a number in (0, {quote_angle(top, '/s')}] "
+                f"set_speed '{name}': speed must be > 0 and at most {quote_angle(top, '/s')} "
                 f"(the fastest joint's limit), got {quote_angle(speed, '/s')}"
             )
         with self._transaction():
