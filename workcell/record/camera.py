@@ -3,13 +3,15 @@
 :func:`overview_camera` looks down ``elevation`` degrees and fits its distance and look-at
 point so the visual geometry of every given configuration fills the picture without being
 clipped. Its azimuth is chosen among twelve, 30 degrees apart, starting from a
-three-quarter view across the cell's longer side: the first from which no part (static or
-movable) is hidden behind a robot in the first configuration, else the one hiding the
-fewest (a movable part counts ten times as much as a static one). A part's points are
-the centre of each of its visual geoms and the corners of the geom's bounding box drawn
-20 % in towards the centre; a point is hidden when the ray from the camera's eye to it
-first meets a robot's geom (``mj_ray``). A part is hidden when more than half of its
-points are, or, for a movable part, its centre is. Angles in degrees, sizes in pixels.
+three-quarter view across the cell's longer side: the first from which no part is hidden
+behind a robot in the first configuration, else the one that hides least of them
+(:func:`occlusion`). Each visual geom of a part is tested at its centre and at the
+corners of its bounding box drawn 20 % in towards the centre: a point is hidden when the
+ray from the camera's eye to it first meets a robot's geom (``mj_ray``); a geom counts when a third of its points or
+more are hidden. A movable part
+counts ten times as much as a static one, and large static parts (tables, floors: a
+bounding radius over a quarter of the cell's extent) not at all: they are always partly
+behind something. Angles in degrees, sizes in pixels.
 """
 
 from __future__ import annotations
@@ -23,10 +25,11 @@ from numpy.typing import NDArray
 
 from workcell.meshgeoms import COLLISION_GROUP
 
-__all__ = ["AZIMUTH_STEP", "hidden_parts", "overview_camera", "visual_points"]
+__all__ = ["AZIMUTH_STEP", "occlusion", "overview_camera", "visual_points"]
 
 AZIMUTH_STEP = 30.0  # deg between the azimuths tried
-_MOVABLE_WEIGHT = 10  # a hidden movable part costs as much as ten static ones
+_MOVABLE_WEIGHT = 10.0  # a hidden movable part costs as much as ten static ones
+_LARGE = 0.25  # a static geom whose bounding radius is over this x the cell's extent
 Array = NDArray[np.float64]
 _SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
 
@@ -70,27 +73,36 @@ def _robot_bodies(model: mujoco.MjModel) -> NDArray[np.bool_]:
     return (np.arange(model.nbody) > 0) & ~free[root]
 
 
-def hidden_parts(model: mujoco.MjModel, data: mujoco.MjData, eye: Array) -> tuple[int, int]:
-    """(static, movable): how many parts a robot hides from ``eye`` (world, m) in
-    ``data``'s configuration (poses as computed by mj_kinematics); see the module doc."""
+def occlusion(model: mujoco.MjModel, data: mujoco.MjData, eye: Array) -> float:
+    """How much of the parts the robots hide from ``eye`` (world, m) in ``data``'s
+    configuration (poses as computed by mj_kinematics): the sum over the parts' visual
+    geoms of the fraction of their points a robot hides (when a third of them or more),
+    weighted 10 for a movable part, 1 for a static one and 0 for a large static one
+    (module doc); 0: nothing hidden."""
     robot = _robot_bodies(model)
     idx = _visible_geoms(model)
     parts = idx[~robot[model.geom_bodyid[idx]]]
     if len(parts) == 0 or not robot.any():
-        return 0, 0
+        return 0.0
     groups = np.zeros(6, np.uint8)
     groups[:COLLISION_GROUP] = 1
     hit = np.zeros(1, np.int32)
-    counts = [0, 0]
+    large = _LARGE * max(float(model.stat.extent), 1e-9)
+    score = 0.0
     for g, points in zip(parts, _box_points(model, data, parts, 0.8), strict=True):
-        movable = bool(model.geom_bodyid[g] > 0)
-        hidden = []
+        if model.geom_bodyid[g] > 0:
+            weight = _MOVABLE_WEIGHT
+        else:
+            weight = 1.0 if model.geom_rbound[g] < large else 0.0
+        if weight == 0:
+            continue
+        hidden = 0
         for p in points:
             x = mujoco.mj_ray(model, data, eye, p - eye, groups, 1, -1, hit)
-            hidden.append(0 <= x < 1 - 1e-6 and bool(robot[model.geom_bodyid[hit[0]]]))
-        if 2 * sum(hidden) > len(hidden) or (movable and hidden[0]):
-            counts[int(movable)] += 1
-    return counts[0], counts[1]
+            hidden += 0 <= x < 1 - 1e-6 and bool(robot[model.geom_bodyid[hit[0]]])
+        if 3 * hidden >= len(points):  # a corner or two behind a robot is no harm
+            score += weight * hidden / len(points)
+    return score
 
 
 def _fit(
@@ -153,8 +165,7 @@ def overview_camera(
         for k in range(round(360 / AZIMUTH_STEP)):
             az = start + AZIMUTH_STEP * ((k + 1) // 2) * (1 if k % 2 else -1)  # 0, +30, -30 ...
             c, d, f = _fit(P, az, elevation, tv, th)
-            static, movable = hidden_parts(model, data, c - d * f)
-            score = _MOVABLE_WEIGHT * movable + static
+            score = occlusion(model, data, c - d * f)
             if best is None or score < best[0]:
                 best = (score, az, c, d)
             if score == 0:
