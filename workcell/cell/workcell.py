@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell import limits
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, ModelError, WorkcellError
 from workcell.files import atomic_write_text, load_json
@@ -172,12 +173,11 @@ def look_at(position: ArrayLike, target: ArrayLike) -> Array:
 
 
 def _vec3(value: object, what: str) -> Array:
-    try:
-        v = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise GeometryError(f"{what} must be 3 finite numbers (m), got {value!r}") from exc
-    if v.shape != (3,) or not np.all(np.isfinite(v)):
+    values = list(value) if isinstance(value, (list, tuple, np.ndarray)) else []
+    if len(values) != 3 or not all(is_finite_number(x) for x in values):
         raise GeometryError(f"{what} must be 3 finite numbers (m), got {value!r}")
+    v = np.array(values, dtype=np.float64)
+    limits.check("max_coordinate", float(np.abs(v).max()), what)
     return v
 
 
@@ -305,6 +305,8 @@ class Workcell:
         what = f"static part '{name}'"
         ent = self._entity(entity, what)
         T = as_transform(np.eye(4) if pose is None else pose, rigid=True, name=f"{what} pose")
+        if len(self.model.world_mesh(ent).faces) == 0:
+            raise GeometryError(f"{what}: entity {ent[0]} '{ent[1]}' is empty (no faces)")
         part = StaticPart(name, ent, T, self._colour(colour, ent, what))
         self._static[name] = part
         return part

@@ -55,7 +55,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workcell.errors import GeometryError, ModelError
-from workcell.files import atomic_write_bytes, atomic_write_text
+from workcell.files import write_files
 from workcell.meshgeoms import (
     MESHDIR,
     MeshAssets,
@@ -420,10 +420,7 @@ def export_robot(
         xml = spec_to_xml(spec)
     except ValueError as exc:
         raise GeometryError(f"robot '{robot.name}' does not compile in MuJoCo: {exc}") from exc
-    out = Path(out_dir)
-    (out / MESHDIR).mkdir(parents=True, exist_ok=True)
-    for file, data in spec.assets.items():
-        atomic_write_bytes(out / MESHDIR / file, data)
-    path = out / (file_name or f"{prefix}{robot.name}.xml")
-    atomic_write_text(path, xml)
-    return path
+    name = file_name or f"{prefix}{robot.name}.xml"
+    files = {f"{MESHDIR}/{file}": data for file, data in spec.assets.items()}
+    write_files(out_dir, {**files, name: xml.encode("utf-8")}, error=ModelError)
+    return Path(out_dir) / name
