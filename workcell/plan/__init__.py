@@ -1,0 +1,1 @@
+"""Collision-free motion (OMPL) and task-level commands (pick, place, handover)."""
