@@ -12,6 +12,7 @@ __all__ = [
     "GraspError",
     "JointLimitError",
     "KinematicsError",
+    "LimitError",
     "ModelError",
     "PlanningError",
     "ProgramError",
@@ -74,3 +75,8 @@ class RenderError(WorkcellError):
 
 class RecordError(WorkcellError):
     """A recording could not be written or streamed (bad path, viewer unreachable)."""
+
+
+class LimitError(WorkcellError):
+    """Work over a limit of :mod:`workcell.limits` was refused before it started (the
+    message names the limit and how to raise it)."""

@@ -80,8 +80,6 @@ _PIECE_RGBA = np.array(  # collision pieces, one colour each in turn (collision 
 )
 _backend: str | None = None  # the GL backend that worked, kept for the process
 
-Image = NDArray[np.uint8]
-
 
 def __getattr__(name: str) -> Any:
     """The names of :mod:`workcell.record.sheets`, imported on first use (it imports this
@@ -173,7 +171,7 @@ class CellRenderer:
         cam.type, cam.fixedcamid = mujoco.mjtCamera.mjCAMERA_FIXED, cid
         return cam
 
-    def render(self, data: mujoco.MjData, camera: str | mujoco.MjvCamera) -> Image:
+    def render(self, data: mujoco.MjData, camera: str | mujoco.MjvCamera) -> NDArray[np.uint8]:
         """An (H, W, 3) uint8 picture of ``data`` (poses as computed by mj_forward)."""
         if self._mjr is None:
             raise RenderError("the renderer is closed")
@@ -405,7 +403,7 @@ def render_frame(
     camera: str | None = None,
     width: int = 640,
     height: int = 480,
-) -> Image:
+) -> NDArray[np.uint8]:
     """The cell at timeline ``frame`` (negative counts from the end) as (H, W, 3) uint8.
 
     ``camera``: a camera of the cell by name, or None for :func:`overview_camera` over
@@ -428,7 +426,7 @@ def render_cell(
     height: int = 480,
     collision: bool = False,
     concavity: float | None = None,
-) -> Image:
+) -> NDArray[np.uint8]:
     """The cell in its initial state (no simulation) as (H, W, 3) uint8; see :func:`render_frame`.
 
     ``collision``: draw the collision pieces (non-convex parts decomposed within

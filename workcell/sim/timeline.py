@@ -39,8 +39,9 @@ Array = NDArray[np.float64]
 class Event(NamedTuple):
     """Something that happened at simulated time ``t`` (s): ``robot`` (None: the whole
     cell), ``kind`` ("move", "wait", "grasp", "release", "collision", "error", ...), a
-    human-readable ``detail``, and ``frame``: the last frame on the timeline when it was
-    recorded (the frame showing its result; several frames may share one time)."""
+    human-readable ``detail``, and ``frame``: the frame showing it (for a command, the last
+    frame on the timeline when it was recorded, its result; for a collision, the first
+    frame in which the pair overlaps; several frames may share one time)."""
 
     t: float
     robot: str | None
@@ -262,9 +263,13 @@ class Timeline:
         """Every event, in order."""
         return tuple(self._events)
 
-    def add_event(self, t: float, robot: str | None, kind: str, detail: str = "") -> Event:
-        """Record an event and return it."""
-        e = Event(float(t), robot, str(kind), str(detail), self._n - 1)
+    def add_event(
+        self, t: float, robot: str | None, kind: str, detail: str = "", frame: int | None = None
+    ) -> Event:
+        """Record an event and return it; its ``frame`` defaults to the last frame so far
+        (give it for an event that belongs to a frame about to be added, e.g. a collision
+        found while a batch of frames is computed)."""
+        e = Event(float(t), robot, str(kind), str(detail), self._n - 1 if frame is None else frame)
         self._events.append(e)
         return e
 
