@@ -18,7 +18,7 @@ waypoint, so the frames stay on the checked segments. All joints move together i
 mode (joint-by-joint mode would leave the checked segments). Planned moves cannot run
 inside ``concurrently()`` (the other robots' motions are not known to the planner).
 
-Settings (:class:`PlanningOptions`, ``sim.planning``): ``clearance`` (m, default 5 mm;
+Settings (:class:`PlanningOptions`, changed with ``sim.set_planning(...)``): ``clearance`` (m, default 5 mm;
 never below the contact tolerance), ``time_limit`` (s per search, default 5) and
 ``seed`` (default 0): the same cell, program and seed give the same paths;
 ``near_clearance`` (m, default 1 mm) for the close work of task-level commands.
@@ -29,7 +29,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -87,26 +87,47 @@ def describe(v: Violation, clearance: float) -> str:
 class PlanningCommands:
     """Planned moves (a mixin of Simulator; see the module doc)."""
 
-    planning: PlanningOptions = PlanningOptions()
+    _planning: PlanningOptions = PlanningOptions()
 
-    def planning_scene(
+    def set_planning(
+        self,
+        *,
+        clearance: float | None = None,
+        time_limit: float | None = None,
+        seed: int | None = None,
+        near_clearance: float | None = None,
+    ) -> dict[str, float]:
+        """Change how planned moves search (the values given; see :class:`PlanningOptions`:
+        ``clearance`` and ``near_clearance`` in m, ``time_limit`` in s, ``seed``) and return
+        the settings now in force."""
+        changes = {
+            k: v
+            for k, v in dict(
+                clearance=clearance, time_limit=time_limit, seed=seed, near_clearance=near_clearance
+            ).items()
+            if v is not None
+        }
+        self._planning = replace(self._planning, **changes)
+        return asdict(self._planning)
+
+    def _planning_scene(
         self, robots: Sequence[str], *, near: bool = False, **options: Any
     ) -> PlanningScene:
         """A planning scene of ``robots`` in the cell as it is now, with the clearance of
         ``planning`` (``near``: its near clearance; never below the contact tolerance);
         ``options``: the other arguments of :class:`~workcell.plan.scene.PlanningScene`."""
-        c = self.planning.near_clearance if near else self.planning.clearance
+        c = self._planning.near_clearance if near else self._planning.clearance
         clearance = max(c, self.contacts.tolerance)
         return PlanningScene(self, robots, clearance=clearance, **options)
 
-    def plan_joint_path(
+    def _plan_joint_path(
         self, robot: str, goals: Sequence[Array], command: str, scene: PlanningScene | None = None
     ) -> PlannedPath:
         """A collision-free path of ``robot`` from its joints now to the first of ``goals``
         (rad/m, in order of preference) that has one; PlanningError otherwise (module doc).
         Changes nothing."""
         name = self._robot(robot)
-        sc = scene or self.planning_scene([name])
+        sc = scene or self._planning_scene([name])
         if sc.start_collision is not None:
             raise PlanningError(
                 f"{command} '{name}': start in collision: {describe(sc.start_collision, sc.clearance)}"
@@ -129,7 +150,7 @@ class PlanningCommands:
         step = sc.step(name)
         t0 = time.perf_counter()
         for q in ok:
-            left = self.planning.time_limit - (time.perf_counter() - t0)
+            left = self._planning.time_limit - (time.perf_counter() - t0)
             if left <= 0:
                 break
             path = plan_path(
@@ -140,20 +161,20 @@ class PlanningCommands:
                 robot_.upper,
                 step=step,
                 time_limit=left,
-                seed=self.planning.seed,
+                seed=self._planning.seed,
             )
             if path is not None:
                 return PlannedPath(path, time.perf_counter() - t0, step)
         raise PlanningError(
             f"{command} '{name}': time limit reached: no collision-free path found in "
-            f"{self.planning.time_limit:g} s (clearance {sc.clearance * 1e3:.3g} mm); "
-            "raise sim.planning's time_limit or lower its clearance"
+            f"{self._planning.time_limit:g} s (clearance {sc.clearance * 1e3:.3g} mm); "
+            "raise the time limit or lower the clearance (set_planning)"
         )
 
     def _move_planned(self, name: str, goals: Sequence[Array], command: str) -> None:
         """Plan a path to the first reachable of ``goals`` and run it (module doc)."""
         self._not_in_block(f"{command} with plan=True")
-        planned = self.plan_joint_path(name, goals, command)
+        planned = self._plan_joint_path(name, goals, command)
         self._run_waypoints(name, planned.waypoints, command, planned)
 
     def _run_waypoints(

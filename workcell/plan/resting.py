@@ -14,7 +14,7 @@ ground; never robots) is measured:
   how much. Its orientation is kept: a tilted part does not tip over (physics mode does
   that).
 
-:meth:`RestingCommands.resting_pose` gives where a part, held in a given orientation above
+:meth:`RestingCommands._resting_pose` gives where a part, held in a given orientation above
 a point, comes to rest when lowered (``place`` releases it there).
 """
 
@@ -70,14 +70,14 @@ class RestingCommands:
             out.append((label, geom_vertices(m, d, int(g))))
         return out
 
-    def part_drop(self, part: str, pose: Array | None = None) -> Drop:
+    def _part_drop(self, part: str, pose: Array | None = None) -> Drop:
         """How far ``part`` (at ``pose``, its body frame, default where it is) can move
         straight down before it rests, and on what."""
         if part not in self._part_body:
             self.part_pose(part)  # raises ProgramError naming the parts
         return drop(self._part_pieces(part, pose), self._supports(part))
 
-    def resting_pose(
+    def _resting_pose(
         self, part: str, rotation: Array, xy: Array, above: float
     ) -> tuple[Array, Drop]:
         """The pose (4x4) where ``part`` comes to rest when lowered with body rotation
@@ -89,7 +89,7 @@ class RestingCommands:
         P[:3, 3] = np.array([xy[0], xy[1], 0.0]) - rotation @ c
         low = min(float(v[:, 2].min()) for v in self._part_pieces(part, P))
         P[2, 3] += above - low
-        found = self.part_drop(part, P)
+        found = self._part_drop(part, P)
         if np.isfinite(found.distance):
             P[2, 3] -= found.distance
         return P, found
@@ -98,7 +98,7 @@ class RestingCommands:
         """Warn about, or settle, a part just released by ``name`` that nobody holds."""
         if self._holders[part]:
             return
-        d = self.part_drop(part)
+        d = self._part_drop(part)
         if not np.isfinite(d.distance):
             self.timeline.add_event(
                 self.sim_time, name, "warning", f"'{part}' released with nothing below it"

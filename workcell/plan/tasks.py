@@ -16,7 +16,7 @@ changes nothing (it is one transaction).
 - ``place(robot, part, on=support, position=None)``: the part, turned only about the
   vertical from how it is held (tool pointing down), is lowered over ``position`` (x, y
   in m, world; default: the centroid of the support's top face) until it touches what is
-  below it (:meth:`~workcell.plan.resting.RestingCommands.resting_pose`): that must be
+  below it (:meth:`~workcell.plan.resting.RestingCommands._resting_pose`): that must be
   ``on``. The robot brings it there (planned move, straight line down), releases it
   (``settle``: it rests exactly) and retreats.
 - ``handover(giver, receiver, part)``: a meeting pose in both workspaces (points between
@@ -123,8 +123,8 @@ class TaskCommands:
             )
         placement = self.cell.robots[name]
         grasps = self._grasps(name, part, self.part_pose(part), "pick")
-        grasp_scene = self.planning_scene([name], near=True, grips=[(name, part)])
-        free_scene = self.planning_scene([name])
+        grasp_scene = self._planning_scene([name], near=True, grips=[(name, part)])
+        free_scene = self._planning_scene([name])
         fails = _Failures()
         q0 = self.joints(name)
         options = self._reachable(placement, [g.tool for g in grasps], q0, approach, fails)
@@ -169,14 +169,14 @@ class TaskCommands:
         tools, after = [], []
         travel = float(placement.robot.gripper.finger_travel)
         for R in _turns(T_tool[:3, :3]):
-            P, landed = self.resting_pose(part, R @ rel[:3, :3], xy, top + 0.01)
+            P, landed = self._resting_pose(part, R @ rel[:3, :3], xy, top + 0.01)
             if landed.support != on:
                 where = landed.support or "nothing"
                 fails.other = f"lowered over ({xy[0]:.4g}, {xy[1]:.4g}) m it would rest on {where}"
                 continue
             tools.append(P @ invert(rel))
             after.append(
-                self.planning_scene(
+                self._planning_scene(
                     [name],
                     near=True,
                     carry=False,
@@ -188,8 +188,8 @@ class TaskCommands:
             )
         if not tools:
             raise ProgramError(f"place '{name}': '{part}' cannot be put on '{on}': {fails.other}")
-        scene = self.planning_scene([name], near=True, touching=[(part, on)])
-        free_scene = self.planning_scene([name])
+        scene = self._planning_scene([name], near=True, touching=[(part, on)])
+        free_scene = self._planning_scene([name])
         options = self._reachable(placement, tools, self.joints(name), approach, fails)
         for reach, planned in self._first_paths(
             name, options, scene, free_scene, fails, "place", part, approach, after
@@ -218,9 +218,9 @@ class TaskCommands:
         meet = self._meeting(g, r, part, approach)
         qg, reach = meet
         with self._transaction():
-            planned = self.plan_joint_path(g, [qg], "handover")
+            planned = self._plan_joint_path(g, [qg], "handover")
             self._run_waypoints(g, planned.waypoints, "handover", planned)
-            planned = self.plan_joint_path(r, [reach.q_above], "handover")
+            planned = self._plan_joint_path(r, [reach.q_above], "handover")
             self._run_waypoints(r, planned.waypoints, "handover", planned)
             self.move_straight_line(r, reach.tool)
             if self.close_gripper(r) != part:
@@ -345,7 +345,7 @@ class TaskCommands:
             if reach is None:
                 continue
             try:
-                planned = self.plan_joint_path(name, [reach.q_above], f"{command} '{part}'")
+                planned = self._plan_joint_path(name, [reach.q_above], f"{command} '{part}'")
             except PlanningError as exc:
                 fails.other = str(exc)
                 tried += 1
@@ -359,7 +359,7 @@ class TaskCommands:
         if fails.other and fails.collisions == 0 and fails.unreachable < n:
             return PlanningError(f"{what}: no collision-free path for '{part}': {fails.other}")
         if fails.collisions:
-            why = describe(fails.nearest, self.planning.clearance) if fails.nearest else ""
+            why = describe(fails.nearest, self._planning.clearance) if fails.nearest else ""
             extra = f"; {fails.other}" if fails.other else ""
             return PlanningError(
                 f"{what}: every reachable {kind} of '{part}' collides ({fails.collisions} "
@@ -417,8 +417,8 @@ class TaskCommands:
         T_now = self.tool_pose(g)
         rel = invert(T_now) @ self.part_pose(part)
         c_tool = rel[:3, :3] @ self._centroids[part] + rel[:3, 3]  # centroid, tool frame
-        both = self.planning_scene([g, r], near=True, grips=[(r, part)])
-        giver_alone = self.planning_scene([g])
+        both = self._planning_scene([g, r], near=True, grips=[(r, part)])
+        giver_alone = self._planning_scene([g])
         qr_now = self.joints(r)
         fails = _Failures()
         n = 0
@@ -477,7 +477,7 @@ class TaskCommands:
                 if reach is None:
                     continue
                 # once the giver lets go: its fingers open, then it backs off
-                opened = self.planning_scene(
+                opened = self._planning_scene(
                     [g],
                     near=True,
                     carry=False,

@@ -548,9 +548,7 @@ class Simulator(
                     collide(m, d)
                     if d.ncon or self._touching:
                         pens = self.contacts.penetrations(d)
-                        self._contact_events(
-                            float(times[j]), pens, mover=mover, frame=first + j
-                        )
+                        self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
                 walls[j] = clock()
         self.timeline.extend(times, w0 + (walls - c0), Q)
         self.sim_time = float(times[-1])
