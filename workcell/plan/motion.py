@@ -7,8 +7,8 @@ holds) in the cell as it is now checks the start (a pair overlapping by more tha
 contact tolerance: PlanningError naming it) and the goal (every IK solution of a pose, in
 the order ``move_end_effector`` prefers them; all in collision: PlanningError naming the
 nearest pair), then :func:`~workcell.plan.rrt.plan_path` finds a collision-free path to
-the first goal that has one, with motions checked at the scene's resolution (every
-moving point within the clearance between two checks). No path within the time limit:
+the first goal that has one, every motion checked densely enough that no moving point
+travels more than the clearance between two checks. No path within the time limit:
 PlanningError. A failure changes nothing.
 
 The path is run segment by segment, each straight joint-space segment as one joint move
@@ -68,12 +68,13 @@ class PlanningOptions:
 
 @dataclass(frozen=True)
 class PlannedPath:
-    """A planned path: ``waypoints`` (k, dof) from the start to ``goal`` (row k-1), the
-    search time ``seconds`` (wall clock) and the joint-space ``step`` of its checks."""
+    """A planned path: ``waypoints`` (k, dof) from the start to the goal (row k-1), the
+    search time ``seconds`` (wall clock) and the ``radii`` its motions were checked with
+    (m per unit of each joint; see :meth:`PlanningScene.radii`)."""
 
     waypoints: Array
     seconds: float
-    step: float
+    radii: Array
 
 
 def describe(v: Violation, clearance: float) -> str:
@@ -121,11 +122,17 @@ class PlanningCommands:
         return PlanningScene(self, robots, clearance=clearance, **options)
 
     def _plan_joint_path(
-        self, robot: str, goals: Sequence[Array], command: str, scene: PlanningScene | None = None
+        self,
+        robot: str,
+        goals: Sequence[Array],
+        command: str,
+        scene: PlanningScene | None = None,
+        resolution: float | None = None,
     ) -> PlannedPath:
         """A collision-free path of ``robot`` from its joints now to the first of ``goals``
         (rad/m, in order of preference) that has one; PlanningError otherwise (module doc).
-        Changes nothing."""
+        Changes nothing. ``resolution``: OMPL's fixed motion resolution instead of the
+        scene's (for comparisons; see :func:`~workcell.plan.rrt.plan_path`)."""
         name = self._robot(robot)
         sc = scene or self._planning_scene([name])
         if sc.start_collision is not None:
@@ -147,7 +154,7 @@ class PlanningCommands:
             )
         robot_ = self.cell.robots[name].robot
         q0 = self.joints(name)
-        step = sc.step(name)
+        radii = sc.radii(name)
         t0 = time.perf_counter()
         for q in ok:
             left = self._planning.time_limit - (time.perf_counter() - t0)
@@ -159,12 +166,14 @@ class PlanningCommands:
                 q,
                 robot_.lower,
                 robot_.upper,
-                step=step,
+                radii=radii,
+                clearance=sc.clearance,
                 time_limit=left,
                 seed=self._planning.seed,
+                resolution=resolution,
             )
             if path is not None:
-                return PlannedPath(path, time.perf_counter() - t0, step)
+                return PlannedPath(path, time.perf_counter() - t0, radii)
         raise PlanningError(
             f"{command} '{name}': time limit reached: no collision-free path found in "
             f"{self._planning.time_limit:g} s (clearance {sc.clearance * 1e3:.3g} mm); "

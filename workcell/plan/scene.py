@@ -23,12 +23,13 @@ links, and each gripper and part never checked together; two groups collide unle
 are fixed or they are such a pair), so a check in free space costs one or two
 ``mj_kinematics`` and one ``mj_collision`` with no contact to look at (~10-20 us here).
 
-:meth:`PlanningScene.step` is the joint-space resolution that keeps every moving point
-within ``clearance`` of where it was at the nearest check: a point of the links after
-joint i moves at most ``sum_i |dq_i| R_i`` along a straight joint-space segment, with
-``R_i`` the largest distance from joint i's axis to any moving geometry beyond it (the
-chain of joint-anchor distances plus each geom's bounding sphere), so checks
-``clearance / |R|`` apart (Cauchy-Schwarz) bound every displacement by the clearance.
+:meth:`PlanningScene.radii` bounds how far things move with the joints: a point of the
+links after joint i moves at most ``sum_i |dq_i| R_i`` along a straight joint-space
+segment, with ``R_i`` the largest distance from joint i's axis to any moving geometry
+beyond it (the chain of joint-anchor distances plus each geom's bounding sphere; 1 for a
+prismatic joint), so checks ``sum_i |dq_i| R_i / clearance`` times along a segment keep
+every displacement between two checks within the clearance
+(:func:`workcell.plan.rrt.checks_needed`).
 Units: metres, radians.
 """
 
@@ -265,24 +266,45 @@ class PlanningScene:
     # ------------------------------------------------------------------ resolution
     def radii(self, robot: str | None = None) -> Array:
         """R_i (m per rad, or 1 for a prismatic joint): a bound of how far any moving point
-        beyond joint i moves per unit of joint i (module doc)."""
+        beyond joint i moves per unit of joint i, whatever the other joints (module doc).
+
+        A point p moved by joint i (and maybe later joints) is at most
+        ``d_i(A_{i+1}) + |A_{i+2} - A_{i+1}| + ... + |p - A_k|`` from joint i's axis:
+        ``d_i(A_{i+1})``, the distance of the next joint's anchor from the axis, and each
+        anchor-to-anchor distance are fixed by the links; p's distance from the anchor of
+        the last joint k that moves it is fixed too (plus its geom's bounding sphere).
+        Geometry moved by joint i alone is at a fixed distance from its axis.
+        """
         robot = robot or self.robots[0]
         m, d = self.model, self.data
         self._pose()
         joints = self._joints[robot]
+        n = len(joints)
         anchors = d.xanchor[joints]
-        links = np.linalg.norm(np.diff(anchors, axis=0), axis=1)
+        axes = d.xaxis[joints]
         prismatic = m.jnt_type[joints] == mujoco.mjtJoint.mjJNT_SLIDE
         span = np.where(prismatic, m.jnt_range[joints, 1] - m.jnt_range[joints, 0], 0.0)
-        links = links + span[1:]  # a prismatic joint moves the anchors after it
-        chain = np.concatenate([[0.0], np.cumsum(links)])  # anchor 0 .. k along the chain
-        carrier = self._carrier(joints)
-        n = len(joints)
-        reach = np.zeros(n)  # reach[k]: farthest geometry carried by joint k from anchor k
-        for g, k in carrier.items():
-            r = float(np.linalg.norm(d.geom_xpos[g] - anchors[k])) + float(m.geom_rbound[g])
-            reach[k] = max(reach[k], r)
-        R = np.array([max(chain[k] - chain[i] + reach[k] for k in range(i, n)) for i in range(n)])
+        # a prismatic joint moves the anchors after it by up to its span
+        links = np.linalg.norm(np.diff(anchors, axis=0), axis=1) + span[1:]
+
+        def off_axis(i: int, p: Array) -> float:
+            v = p - anchors[i]
+            return float(np.linalg.norm(v - (v @ axes[i]) * axes[i]))
+
+        reach = np.zeros(n)  # farthest geometry carried by joint k from anchor k
+        own = np.zeros(n)  # farthest geometry carried by joint k from axis k
+        for g, k in self._carrier(joints).items():
+            rb = float(m.geom_rbound[g])
+            reach[k] = max(reach[k], float(np.linalg.norm(d.geom_xpos[g] - anchors[k])) + rb)
+            own[k] = max(own[k], off_axis(k, d.geom_xpos[g]) + rb)
+        R = np.zeros(n)
+        for i in range(n):
+            R[i] = own[i]
+            chain = off_axis(i, anchors[i + 1]) if i + 1 < n else 0.0
+            for k in range(i + 1, n):
+                R[i] = max(R[i], chain + reach[k])
+                if k + 1 < n:
+                    chain += links[k]
         return np.where(prismatic, 1.0, R)
 
     def _carrier(self, joints: list[int]) -> dict[int, int]:
@@ -304,8 +326,3 @@ class PlanningScene:
             if a in jbody:
                 out[int(g)] = jbody[a]
         return out
-
-    def step(self, robot: str | None = None) -> float:
-        """The joint-space distance (Euclidean, rad/m) between checks that keeps every
-        moving point's displacement within the clearance (module doc)."""
-        return self.clearance / float(np.linalg.norm(self.radii(robot)))
