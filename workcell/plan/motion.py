@@ -128,11 +128,13 @@ class PlanningCommands:
         command: str,
         scene: PlanningScene | None = None,
         resolution: float | None = None,
+        time_limit: float | None = None,
     ) -> PlannedPath:
         """A collision-free path of ``robot`` from its joints now to the first of ``goals``
         (rad/m, in order of preference) that has one; PlanningError otherwise (module doc).
         Changes nothing. ``resolution``: OMPL's fixed motion resolution instead of the
-        scene's (for comparisons; see :func:`~workcell.plan.rrt.plan_path`)."""
+        scene's (for comparisons; see :func:`~workcell.plan.rrt.plan_path`);
+        ``time_limit`` (s): the search budget (default: the planning settings')."""
         name = self._robot(robot)
         sc = scene or self._planning_scene([name])
         if sc.start_collision is not None:
@@ -155,9 +157,10 @@ class PlanningCommands:
         robot_ = self.cell.robots[name].robot
         q0 = self.joints(name)
         radii = sc.radii(name)
+        budget = self._planning.time_limit if time_limit is None else time_limit
         t0 = time.perf_counter()
         for q in ok:
-            left = self._planning.time_limit - (time.perf_counter() - t0)
+            left = budget - (time.perf_counter() - t0)
             if left <= 0:
                 break
             path = plan_path(
@@ -176,7 +179,7 @@ class PlanningCommands:
                 return PlannedPath(path, time.perf_counter() - t0, radii)
         raise PlanningError(
             f"{command} '{name}': time limit reached: no collision-free path found in "
-            f"{self._planning.time_limit:g} s (clearance {sc.clearance * 1e3:.3g} mm); "
+            f"{budget:.3g} s (clearance {sc.clearance * 1e3:.3g} mm); "
             "raise the time limit or lower the clearance (set_planning)"
         )
 

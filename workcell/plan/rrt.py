@@ -114,7 +114,7 @@ def plan_path(
             bounds.setHigh(i, float(upper[i]))
         space.setBounds(bounds)
         si = ob.SpaceInformation(space)
-        si.setStateValidityChecker(lambda state: valid(read(state, s_buf)))
+        si.setStateValidityChecker(lambda state: bool(valid(read(state, s_buf))))
         motions = None
         if resolution is None:
             motions = Motions(si)

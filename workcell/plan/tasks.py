@@ -34,6 +34,7 @@ one collides, or no path found), ProgramError (unknown names, not a support).
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -62,7 +63,7 @@ MEETING_HEIGHTS = (0.2, 0.25, 0.15, 0.3, 0.1)  # m above the higher base
 MEETING_SIDES = (0.0, 0.1, -0.1)  # m across the segment between the bases
 _LINE_STEP = 0.005  # m, as move_straight_line's default
 _MAX_JUMP = math.radians(10)
-_PATH_TRIES = 3  # candidates tried with the planner before giving up
+_PATH_TRIES = 3  # candidates tried with the planner (within one time limit) at most
 
 
 @dataclass(frozen=True)
@@ -339,13 +340,19 @@ class TaskCommands:
         order (at most a few are tried with the planner); ``after``: per tool pose (the
         options' first field), the scene once the gripper has opened there."""
         tried = 0
+        deadline = time.perf_counter() + self._planning.time_limit  # one budget for all
         for k, _, T, q in options:
             opened = after[k] if after is not None else None
             reach = self._checked(name, q, T, approach, near, free, fails, opened)
             if reach is None:
                 continue
             try:
-                planned = self._plan_joint_path(name, [reach.q_above], f"{command} '{part}'")
+                left = deadline - time.perf_counter()
+                if left <= 0:
+                    return
+                planned = self._plan_joint_path(
+                    name, [reach.q_above], f"{command} '{part}'", time_limit=left
+                )
             except PlanningError as exc:
                 fails.other = str(exc)
                 tried += 1
