@@ -94,6 +94,20 @@ MODULES = [
     "workcell.examples.thesis_joints",
     "workcell.examples.thesis_pick_place",
     "workcell.examples.thesis_handoff",
+    "workcell.study",
+    "workcell.study.spec",
+    "workcell.study.candidates",
+    "workcell.study.program",
+    "workcell.study.variants",
+    "workcell.study.metrics",
+    "workcell.study.evaluation",
+    "workcell.study.prepare",
+    "workcell.study.pool",
+    "workcell.study.backends",
+    "workcell.study.results",
+    "workcell.study.plots",
+    "workcell.study.runner",
+    "workcell.study.cli",
 ]
 
 

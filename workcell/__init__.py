@@ -20,6 +20,7 @@ from workcell.errors import (
     ProtocolError,
     RecordError,
     RenderError,
+    StudyError,
     UnreachableError,
     WorkcellError,
 )
@@ -50,6 +51,7 @@ __all__ = [
     "Relation",
     "RenderError",
     "Simulator",
+    "StudyError",
     "Surface",
     "Timeline",
     "UnreachableError",

@@ -16,7 +16,11 @@ __all__ = ["SUBCOMMAND_MODULES", "main"]
 # Modules that add their own subcommands: each has ``register(sub)``, which adds its
 # parsers to the ``argparse`` subparsers ``sub`` and sets ``func`` (args -> exit code).
 # Keep their top-level imports light: ``workcell --help`` imports every one of them.
-SUBCOMMAND_MODULES: tuple[str, ...] = ("workcell.record.cli_render", "workcell.program.cli")
+SUBCOMMAND_MODULES: tuple[str, ...] = (
+    "workcell.record.cli_render",
+    "workcell.program.cli",
+    "workcell.study.cli",
+)
 
 
 def _demo_solids(args: argparse.Namespace) -> int:

@@ -19,6 +19,7 @@ __all__ = [
     "ProtocolError",
     "RecordError",
     "RenderError",
+    "StudyError",
     "UnreachableError",
     "WorkcellError",
 ]
@@ -75,6 +76,10 @@ class RenderError(WorkcellError):
 
 class RecordError(WorkcellError):
     """A recording could not be written or streamed (bad path, viewer unreachable)."""
+
+
+class StudyError(WorkcellError):
+    """A study could not be set up or run (bad parameter, output folder of another study)."""
 
 
 class LimitError(WorkcellError):

@@ -231,7 +231,9 @@ def two_link_robot():
         LinkGeometry(2, "cube", spatial.translation(-0.1, 0, 0) @ spatial.scaling(2.0, 1.0, 0.5)),
         LinkGeometry(2, "cube", spatial.translation(0.1, 0, 0) @ spatial.scaling(-1.0, 1.0, 1.0)),
     )
-    return Robot("two", (Joint("a", a=0.3), Joint("b", a=0.2)), model=m, geometry=geo)
+    return Robot(
+        "two", (Joint.from_dh("a", a=0.3), Joint.from_dh("b", a=0.2)), model=m, geometry=geo
+    )
 
 
 def test_convex_pieces_rule():

@@ -31,7 +31,7 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
   ``mj_resetDataKeyframe``, before playing: ctrl 0 would drive the arms to q = 0).
 
 Initial joint values live in ``qpos0`` through each joint's ``ref``: the link bodies are
-written at their pose for the initial q (body frame ``placement @ Rz(q0)``) and
+written at their pose for the initial q (body frame ``origin @ M(q0)``, the joint's motion) and
 ``ref = q0``, so MuJoCo's joint value is the robot's joint value (``qpos = q`` gives
 ``fk(q)``) and ``qpos0``, the XML's default pose and ``mj_resetData`` are the initial
 configuration. The exported XML contains no ``<frame>`` element (dm_control 1.0.50's
@@ -71,7 +71,7 @@ from workcell.robots.mjcf import (
     robot_spec,
     spec_to_xml,
 )
-from workcell.spatial import pose_from_pos_quat, quat_from_matrix, rot_z, translation
+from workcell.spatial import pose_from_pos_quat, quat_from_matrix
 
 __all__ = [
     "DEFAULT_TIMESTEP",
@@ -166,8 +166,7 @@ def _set_initial_q(child: mujoco.MjSpec, robot, q: np.ndarray) -> None:  # noqa:
     """Write the link bodies at q and set each joint's ``ref`` to q (so qpos0 = q)."""
     for i, jt in enumerate(robot.joints):
         body = child.body(body_name("", i + 1))
-        T = pose_from_pos_quat(body.pos, body.quat)
-        T = T @ translation(0, 0, float(q[i])) if jt.kind == "prismatic" else T @ rot_z(float(q[i]))
+        T = pose_from_pos_quat(body.pos, body.quat) @ jt.motion(float(q[i]))
         body.pos, body.quat = _pos_quat(T)
         child.joint(joint_name(robot, "", i)).ref = float(q[i])
 

@@ -114,9 +114,9 @@ def reachability(cell: Any) -> list[dict[str, Any]]:
     """For each movable part and each robot: can the tool reach a top-down grasp?
 
     The target is the part's centroid (world, from its initial pose) with the tool's z
-    axis pointing straight down, at the yaws ``GRASP_YAWS_DEG`` about the vertical. A
-    Puma is solved in closed form (``Robot.ik_closed_form``, any solution within the
-    joint limits), other robots by ``Robot.ik``. Kinematics only: no collision check.
+    axis pointing straight down, at the yaws ``GRASP_YAWS_DEG`` about the vertical. An
+    OPW or UR robot is solved in closed form (``Robot.ik_closed_form``, any solution
+    within the joint limits), other robots by ``Robot.ik``. Kinematics only: no collision check.
     Returns ``{part, robot, reachable, configs, yaw_deg, reason}`` rows.
     """
     import numpy as np
@@ -137,13 +137,13 @@ def reachability(cell: Any) -> list[dict[str, Any]]:
                 T[:3, 3] = centre
                 T = B @ T @ rot_z(math.radians(yaw)) @ rot_x(math.pi)  # tool z down
                 try:
-                    if robot.family == "puma":
+                    if robot.ik_family is not None:
                         sols = [s for s in robot.ik_closed_form(T, placed.q) if s.success]
                         found = [s.config or "" for s in sols]
                         if not found:
-                            from workcell.robots.ik_closed import puma_ik_report
+                            from workcell.robots.ik_closed import ik_report
 
-                            reason = puma_ik_report(robot, T, placed.q)[1] or "no solution"
+                            reason = ik_report(robot, T, placed.q)[1] or "no solution"
                     else:
                         s = robot.ik(T, placed.q)
                         found = [s.config or "numeric"] if s.success else []

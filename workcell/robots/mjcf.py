@@ -1,10 +1,10 @@
-"""Robots to MuJoCo through MjSpec: one body per link, one joint per DH row, link meshes, a tool site.
+"""Robots to MuJoCo through MjSpec: one body per link, one joint per chain joint, link meshes, a tool site.
 
-Standard DH: joint i turns about z of frame i-1, so body i is frame i-1 turned by joint i;
-it sits in body i-1 at what row i-1 adds besides its own joint motion, and DH frame i is
-body i's frame times :func:`fixed_part` of row i. A solid that :class:`LinkGeometry`
-places in DH frame i therefore sits in body i at ``fixed_part(row i) @ transform``.
-Modified DH: joint i turns about z of frame i, so body i is frame i. Names carry a prefix
+Body i is link frame i (:mod:`workcell.robots.chain`): it sits in body i-1 at the joint's
+``origin`` and carries a hinge (revolute) or slide (prismatic) with the joint's ``axis``
+and, for a hinge, ``pos`` = its ``axis_point``, so MuJoCo's body frame follows
+``origin @ M(q)`` exactly. A solid that :class:`LinkGeometry` places in link frame i sits
+in body i at its ``transform``. Names carry a prefix
 (``"puma_1."``) so several robots can share a cell; ``/`` is never used (dm_control
 reserves it).
 
@@ -61,8 +61,8 @@ from workcell.meshgeoms import (
     collision_meshes,
     convex_pieces,
 )
-from workcell.robots.robot import Joint, Robot
-from workcell.spatial import invert, is_rigid, quat_from_matrix, rot_x, rot_z, translation
+from workcell.robots.robot import Robot
+from workcell.spatial import invert, is_rigid, quat_from_matrix
 
 __all__ = [
     "ARMATURE",
@@ -73,7 +73,6 @@ __all__ = [
     "body_name",
     "export_robot",
     "finger_joint_names",
-    "fixed_part",
     "gripper_body_name",
     "joint_name",
     "kinematic_model",
@@ -115,26 +114,6 @@ def finger_joint_names(robot: Robot, prefix: str = "") -> tuple[str, str]:
 
 def _pos_quat(T: Array) -> tuple[list[float], list[float]]:
     return T[:3, 3].tolist(), quat_from_matrix(T[:3, :3]).tolist()
-
-
-def fixed_part(j: Joint, convention: str) -> Array:
-    """The constant part of a DH row once the joint's own motion about/along z is taken out.
-
-    Standard: Rz(theta0) Tz(d0) Tx(a) Rx(alpha); modified: Rx(alpha) Tx(a) Rz(theta0) Tz(d0),
-    where theta0 = offset, d0 = d for a revolute joint and theta0 = theta, d0 = offset for a
-    prismatic one (a rotation and a translation along the same axis commute).
-    """
-    theta0, d0 = (j.theta, j.offset) if j.kind == "prismatic" else (j.offset, j.d)
-    rz = translation(0, 0, d0) @ rot_z(theta0)
-    xa = translation(j.a, 0, 0) @ rot_x(j.alpha)
-    return xa @ rz if convention == "modified" else rz @ xa
-
-
-def _frame_in_body(robot: Robot, k: int) -> Array:
-    """DH frame k expressed in body k's frame (k = 0..n)."""
-    if k == 0 or robot.convention == "modified":
-        return np.eye(4)
-    return fixed_part(robot.joints[k - 1], "standard")
 
 
 def _placed_meshes(
@@ -236,9 +215,8 @@ def robot_spec(
         if not mine:
             body.mass, body.inertia = mass, inertia
             return
-        F = _frame_in_body(robot, k)
         for g in mine:
-            _add_solid(body, robot, g.block, F @ g.transform, g.colour, density, reg, cache)
+            _add_solid(body, robot, g.block, g.transform, g.colour, density, reg, cache)
 
     bodies: list[tuple[str, int]] = []
     parent = spec.worldbody.add_body(name=body_name(prefix, 0))
@@ -247,16 +225,13 @@ def robot_spec(
     bodies.append((parent.name, 0))
     for i, j in enumerate(robot.joints):
         body = parent.add_body(name=body_name(prefix, i + 1))
-        if robot.convention == "standard":
-            placement = fixed_part(robot.joints[i - 1], "standard") if i > 0 else np.eye(4)
-        else:
-            placement = fixed_part(j, "modified")
-        body.pos, body.quat = _pos_quat(placement)
+        body.pos, body.quat = _pos_quat(j.origin)
         kind = mujoco.mjtJoint.mjJNT_SLIDE if j.kind == "prismatic" else mujoco.mjtJoint.mjJNT_HINGE
         body.add_joint(
             name=joint_name(robot, prefix, i),
             type=kind,
-            axis=[0, 0, 1],
+            axis=j.axis.tolist(),
+            pos=j.axis_point.tolist(),
             range=list(j.limits),
             limited=mujoco.mjtLimited.mjLIMITED_TRUE,
             armature=float(armature),
@@ -265,14 +240,13 @@ def robot_spec(
         bodies.append((body.name, i + 1))
         parent = body
     n = robot.dof
-    last = _frame_in_body(robot, n)
     if gripper is None:
-        pos, quat = _pos_quat(last @ robot.tool)
+        pos, quat = _pos_quat(robot.tool)
         parent.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)
     else:
         gname = gripper_body_name(robot, prefix)
         gbody = parent.add_body(name=gname)
-        gbody.pos, gbody.quat = _pos_quat(last @ gripper.mount)
+        gbody.pos, gbody.quat = _pos_quat(gripper.mount)
         bodies.append((gname, n))
         for p in gripper.geometry:
             if p.role == "palm":

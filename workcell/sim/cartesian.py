@@ -1,15 +1,15 @@
 """Cartesian targets for the simulator: one pose to joints, and straight lines.
 
 :func:`solve_pose` turns a world tool pose into joint values for ``move_end_effector``:
-for the Puma family the closed form's in-limit solutions (of the requested configuration,
-if any), nearest to the current joints; otherwise :meth:`Robot.ik` from the current
-joints. It raises :class:`UnreachableError` with the reason (out of reach, outside the
+for robots with a closed-form family (OPW, UR) the in-limit solutions (of the requested
+configuration, if any), nearest to the current joints; otherwise :meth:`Robot.ik` from
+the current joints. It raises :class:`UnreachableError` with the reason (out of reach, outside the
 limits, configuration not available: the available ones are listed).
 
 :func:`line_waypoints` samples the straight line from the current tool pose to a target
 (thesis §4.5 ``move_straight_line``): positions evenly spaced at most ``step`` apart,
 orientation interpolated by slerp (held when start and target orientations agree), each
-sample solved by IK warm-started at the previous sample's joints (the Puma closed form's
+sample solved by IK warm-started at the previous sample's joints (the closed form's
 nearest in-limit solution of the start's arm and elbow configuration, or numerical IK
 from the previous q). A sample with no
 solution, or a joint that would jump more than ``max_jump`` between samples (a
@@ -34,7 +34,7 @@ from workcell.errors import (
     ProgramError,
     UnreachableError,
 )
-from workcell.robots.ik_closed import puma_config, puma_ik_report
+from workcell.robots.ik_closed import config_of, ik_report
 from workcell.sim.planning import plan_waypoints
 from workcell.spatial import angle_between, as_transform, invert
 
@@ -60,7 +60,7 @@ def world_target(T: ArrayLike, command: str, robot: str) -> Array:
 
 
 def _closed_form(placement: RobotPlacement, Tb: Array, q: Array, config: str | None) -> list[Array]:
-    sols, reason = puma_ik_report(placement.robot, Tb, q)
+    sols, reason = ik_report(placement.robot, Tb, q)
     ok = [s for s in sols if s.within_limits]
     if config is not None:
         have = sorted({s.config for s in ok if s.config})
@@ -84,8 +84,8 @@ def pose_solutions(
     nearest to ``q_current`` first (in the largest joint change, so the one a joint move
     reaches soonest: eq. 4.27's duration is proportional to it).
 
-    The Puma family's closed form gives all of them; other robots give the one
-    :meth:`Robot.ik` finds from ``q_current``. ``config``: Puma configuration letters to
+    Closed-form families (``Robot.ik_family``) give all of them; other robots give the
+    one :meth:`Robot.ik` finds from ``q_current``. ``config``: configuration letters to
     require (any of l|r, u|d, n|f, e.g. "ru"). Raises UnreachableError with the reason.
     """
     robot = placement.robot
@@ -96,7 +96,7 @@ def pose_solutions(
         raise KinematicsError(
             f"config must be letters of l|r, u|d, n|f (e.g. 'run'), got {config!r}"
         )
-    if robot.family == "puma":
+    if robot.ik_family is not None:
         return _closed_form(placement, Tb, q_current, config)
     sol = robot.ik(Tb, q_current, config=config)
     if not sol.success:
@@ -156,8 +156,8 @@ def line_waypoints(
     Q = np.empty((n, len(q0)))
     prev = q0
     robot = placement.robot
-    # the Puma keeps its arm and elbow configuration along a line (a switch is a jump)
-    keep = puma_config(robot, q0)[:2] if robot.family == "puma" else None
+    # a closed-form arm keeps its shoulder and elbow along a line (a switch is a jump)
+    keep = config_of(robot, q0)[:2] if robot.ik_family is not None else None
     for k in range(n):
         where = f"at {s[k]:.0%} of the line, tool at ({', '.join(f'{v:.4g}' for v in poses[k, :3, 3])}) m"
         try:
@@ -197,7 +197,7 @@ class CartesianCommands:
     ) -> None:
         """Move the tool to the world pose ``T`` (4x4, m): IK, then linear in joints.
 
-        ``config``: Puma configuration letters to require (e.g. "ru"); default: the
+        ``config``: configuration letters to require (e.g. "ru"); default: the
         in-limit solution nearest the current joints. Raises UnreachableError saying why.
         With ``plan``, a collision-free joint path to the nearest solution that has one
         (see :meth:`~workcell.plan.motion.PlanningCommands.move_joints_absolute`'s
