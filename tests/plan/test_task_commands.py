@@ -75,12 +75,13 @@ def test_picks_and_places_from_the_command_language(tmp_path):
 def bin_cell() -> Workcell:
     cell = pp.build()
     m = cell.model
-    solids.box(m, "outer", size=(0.14, 0.14, 0.08))
-    solids.box(m, "inner", size=(0.12, 0.12, 0.08))
+    # the bin of tests/test_decompose.py (the same mesh: one decomposition, cached)
+    solids.box(m, "outer", size=(0.2, 0.15, 0.1))
+    solids.box(m, "inner", size=(0.18, 0.13, 0.1))
     solids.difference(
         m, "bin", "outer", "inner", transforms=[None, spatial.translation(0.01, 0.01, 0.01)]
     )
-    cell.add_static("bin_1", "bin", spatial.translation(0.17, 0.05, pp.TABLE_TOP))
+    cell.add_static("bin_1", "bin", spatial.translation(0.14, 0.045, pp.TABLE_TOP))
     return cell
 
 
@@ -91,8 +92,8 @@ def test_a_part_placed_in_a_bin_rests_on_its_floor():
     floor = pp.TABLE_TOP + 0.01  # the bin's floor is 10 mm thick
     x, y, z = sim.part_positions()[pp.CUBE]
     # the cube's frame is its lowest corner; it rests on the bin's collision pieces, which
-    # CoACD fits to the surface within ~15 um here (test_decompose measures them)
-    assert z == pytest.approx(floor, abs=2e-5)
+    # CoACD fits to the surface within ~25 um here (test_decompose bounds them by 50 um)
+    assert z == pytest.approx(floor, abs=5e-5)
     # centroid over the centre of the bin's rim
     np.testing.assert_allclose([x + 0.02, y + 0.02], [0.24, 0.12], atol=1e-6)
     assert no_collisions(sim) == []

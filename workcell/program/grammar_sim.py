@@ -183,8 +183,8 @@ _CELL = Keys(
             Choice("name", {k: k for k in cellc.EXAMPLES}),
             _leaf(
                 lambda v: cellc.ExampleCell(v["name"]),
-                "cell example joints|pick-place|handoff",
-                "load one of the thesis's example cells (ch. 5)",
+                "cell example joints|pick-place|handoff|obstacle",
+                "load an example cell: the thesis's three (ch. 5), or a wall between two stages",
                 "cell example joints",
             ),
         ),
