@@ -165,7 +165,18 @@ def _demo(args: argparse.Namespace) -> int:
     if args.example == "obstacle":
         from workcell.examples.obstacle import demo
 
-        return demo(args.mode, args.dt, render=args.render, as_json=args.json)
+        if args.physics:
+            from workcell.errors import ProgramError
+
+            raise ProgramError("demo obstacle has no --physics run; try demo pick-place --physics")
+        return demo(
+            args.mode,
+            args.dt,
+            render=args.render,
+            as_json=args.json,
+            save=args.save,
+            mjcf=args.mjcf,
+        )
     return _demo_cell(args)
 
 

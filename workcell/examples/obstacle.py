@@ -147,8 +147,17 @@ def picture(
         return r.render(data, "overview", paths=paths)
 
 
-def demo(mode: str, dt: float, *, render: str | None = None, as_json: bool = False) -> int:
-    """``workcell demo obstacle``: both programs, the direct one's collisions, the picture."""
+def demo(
+    mode: str,
+    dt: float,
+    *,
+    render: str | None = None,
+    as_json: bool = False,
+    save: str | None = None,
+    mjcf: str | None = None,
+) -> int:
+    """``workcell demo obstacle``: both programs, the direct one's collisions, the picture
+    (``render``); ``save``: record the task-level run (.rrd); ``mjcf``: export the cell."""
     t0 = time.perf_counter()
     direct, planned = compare(mode, dt)
     hits = [e for e in direct.events if e.kind == "collision"]
@@ -161,6 +170,14 @@ def demo(mode: str, dt: float, *, render: str | None = None, as_json: bool = Fal
         from workcell.record.render import save_png
 
         out["png"] = str(save_png(picture(direct, planned), render))
+    if save:
+        from workcell.record import record
+
+        out["rrd"] = str(record(planned, save, progress=None if as_json else True).path)
+    if mjcf:
+        from workcell.cell import export_cell
+
+        out["mjcf"] = str(export_cell(build(), mjcf))
     if as_json:
         print(json.dumps(out))
         return 0
@@ -181,4 +198,7 @@ def demo(mode: str, dt: float, *, render: str | None = None, as_json: bool = Fal
     )
     if render:
         print(f"picture written to {out['png']} (red: direct program, green: pick/place)")
+    for key, what in (("rrd", "recording of the pick/place run"), ("mjcf", "cell")):
+        if key in out:
+            print(f"{what} written to {out[key]}")
     return 0

@@ -33,80 +33,28 @@ one collides, or no path found), ProgramError (unknown names, not a support).
 
 from __future__ import annotations
 
-import math
-import time
-from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from collections.abc import Iterator
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from workcell.errors import GraspError, PlanningError, ProgramError, UnreachableError
-from workcell.plan.grasps import GraspPose, grasp_poses
-from workcell.plan.motion import PlannedPath, describe
-from workcell.plan.scene import PlanningScene, Violation
+from workcell.errors import GraspError, ProgramError, UnreachableError
+from workcell.plan.choices import ChoiceHelpers, Failures, Reach, turns
+from workcell.plan.scene import PlanningScene
 from workcell.plan.support import top_face
-from workcell.sim.cartesian import line_waypoints, pose_solutions
+from workcell.sim.cartesian import pose_solutions
 from workcell.sim.tasks import approach_pose
-from workcell.spatial import invert, rot_z
-
-if TYPE_CHECKING:
-    from workcell.cell.workcell import RobotPlacement
+from workcell.spatial import invert
 
 __all__ = ["TaskCommands"]
 
 Array = NDArray[np.float64]
-BACKOFFS = (0.0, 0.005, 0.01, 0.015)  # m: tool-centre point back from the centroid
 MEETING_FRACTIONS = (0.5, 0.4, 0.6, 0.3, 0.7)  # along the segment between the two bases
 MEETING_HEIGHTS = (0.2, 0.25, 0.15, 0.3, 0.1)  # m above the higher base
 MEETING_SIDES = (0.0, 0.1, -0.1)  # m across the segment between the bases
-_LINE_STEP = 0.005  # m, as move_straight_line's default
-_MAX_JUMP = math.radians(10)
-_PATH_TRIES = 3  # candidates tried with the planner (within one time limit) at most
 
 
-@dataclass(frozen=True)
-class _Reach:
-    """A reachable tool pose: the ``tool`` pose, its joints ``q``, the ``above`` pose and
-    its joints ``q_above`` (the approach, consistent with ``q`` along a straight line)."""
-
-    tool: Array
-    q: Array
-    above: Array
-    q_above: Array
-
-
-class _Failures:
-    """Why candidates were turned down, for the error message."""
-
-    def __init__(self) -> None:
-        self.unreachable = 0
-        self.reason = ""
-        self.collisions = 0
-        self.nearest: Violation | None = None
-        self.other = ""
-
-    def collide(self, v: Violation | None) -> None:
-        self.collisions += 1
-        if v is not None and (self.nearest is None or v[2] < self.nearest[2]):
-            self.nearest = v
-
-
-def _turns(R: Array) -> list[Array]:
-    """Tool rotations to try for a part held with tool rotation R: turned about the
-    vertical by 0, 90, -90, 180 deg when the tool points down; else pointing down at the
-    yaw of its x axis (then the same turns), R itself last."""
-    yaws = (0.0, math.pi / 2, -math.pi / 2, math.pi)
-    if R[2, 2] < -1 + 1e-6:
-        return [rot_z(a)[:3, :3] @ R for a in yaws]
-    x = R[:3, 0] if abs(R[2, 0]) < 0.9 else R[:3, 1]
-    psi = math.atan2(x[1], x[0])
-    down = np.diag([1.0, -1.0, -1.0])  # tool_down at yaw 0: z down, x along world x
-    return [rot_z(psi + a)[:3, :3] @ down for a in yaws] + [R]
-
-
-class TaskCommands:
+class TaskCommands(ChoiceHelpers):
     """``pick``, ``place`` and ``handover`` (a mixin of Simulator; see the module doc)."""
 
     # ------------------------------------------------------------------ commands
@@ -126,7 +74,7 @@ class TaskCommands:
         grasps = self._grasps(name, part, self.part_pose(part), "pick")
         grasp_scene = self._planning_scene([name], near=True, grips=[(name, part)])
         free_scene = self._planning_scene([name])
-        fails = _Failures()
+        fails = Failures()
         q0 = self.joints(name)
         options = self._reachable(placement, [g.tool for g in grasps], q0, approach, fails)
         for reach, planned in self._first_paths(
@@ -166,10 +114,10 @@ class TaskCommands:
         T_tool = self.tool_pose(name)
         rel = invert(T_tool) @ self.part_pose(part)  # the part in the tool frame
         top = max(float(p.bounds[1, 2]) for p in self._world_meshes())
-        fails = _Failures()
+        fails = Failures()
         tools, after = [], []
         travel = float(placement.robot.gripper.finger_travel)
-        for R in _turns(T_tool[:3, :3]):
+        for R in turns(T_tool[:3, :3]):
             P, landed = self._resting_pose(part, R @ rel[:3, :3], xy, top + 0.01)
             if landed.support != on:
                 where = landed.support or "nothing"
@@ -230,153 +178,6 @@ class TaskCommands:
             self.move_straight_line(g, approach_pose(self.tool_pose(g), approach))
             self.move_straight_line(r, reach.above)
 
-    # ------------------------------------------------------------------ choices
-    def _task_robot(self, robot: object, command: str, approach: float) -> str:
-        name = self._robot(robot)
-        self._not_in_block(command)
-        self._gripper_id(name, command)
-        if not (isinstance(approach, (int, float)) and math.isfinite(approach) and approach > 0):
-            raise ProgramError(f"{command} '{name}': approach must be a number of metres > 0")
-        return name
-
-    def _part_known(self, part: object, command: str) -> None:
-        if not isinstance(part, str) or part not in self._part_body:
-            known = ", ".join(self._part_body) or "none"
-            raise ProgramError(f"{command}: no movable part {part!r}; movable parts: {known}")
-
-    def _grasps(self, name: str, part: str, pose: Array, command: str) -> list[GraspPose]:
-        gripper = self.cell.robots[name].robot.gripper
-        opening = float(gripper.max_opening) - 2.0 * self.contacts.tolerance
-        lo, hi = self._boxes[part]
-        out = grasp_poses(pose, lo, hi, self._centroids[part], opening=opening, backoffs=BACKOFFS)
-        if not out:
-            size = " x ".join(f"{v * 1e3:.4g}" for v in hi - lo)
-            raise GraspError(
-                f"{command} '{name}': no grasp of '{part}' fits the gripper: its box is "
-                f"{size} mm, every width wider than the {opening * 1e3:.4g} mm opening"
-            )
-        return out
-
-    def _reachable(
-        self,
-        placement: RobotPlacement,
-        tools: Sequence[Array],
-        q0: Array,
-        approach: float,
-        fails: _Failures,
-    ) -> list[tuple[int, float, Array, Array]]:
-        """(preference, joint distance, tool pose, q) of every IK solution of ``tools``
-        (in preference order), best first."""
-        out = []
-        for k, T in enumerate(tools):
-            try:
-                sols = pose_solutions(placement, T, q0)
-            except UnreachableError as exc:
-                fails.unreachable += 1
-                fails.reason = fails.reason or str(exc)
-                continue
-            out += [(k, float(np.abs(q - q0).max()), T, q) for q in sols]
-        out.sort(key=lambda o: (o[0], o[1]))
-        return out
-
-    def _line(
-        self, placement: RobotPlacement, q: Array, T: Array, approach: float
-    ) -> tuple[Array, Array] | None:
-        """The straight line from T (joints q) back ``approach`` along the tool axis:
-        (samples (k, dof), the approach pose) or None when it is not possible."""
-        above = approach_pose(T, approach)
-        try:
-            Q, _ = line_waypoints(placement, q, T, above, step=_LINE_STEP, max_jump=_MAX_JUMP)
-        except UnreachableError:
-            return None
-        return Q, above
-
-    def _checked(
-        self,
-        name: str,
-        q: Array,
-        T: Array,
-        approach: float,
-        near: PlanningScene,
-        free: PlanningScene,
-        fails: _Failures,
-        after: PlanningScene | None = None,
-    ) -> _Reach | None:
-        """The reach of pose T at q when T, the line out and the approach pose keep the
-        clearance (``near``: at and along the line; ``free``: at the approach pose;
-        ``after``: at T and along the line once the gripper has opened)."""
-        line = self._line(self.cell.robots[name], q, T, approach)
-        if line is None:
-            fails.unreachable += 1
-            fails.reason = fails.reason or "the approach line leaves the reach"
-            return None
-        Q, above = line
-        for sc in (near, after):
-            if sc is None:
-                continue
-            for qs in (q, *Q):
-                if not sc.valid(qs, name):
-                    fails.collide(sc.violation({name: qs}))
-                    return None
-        v = free.violation({name: Q[-1]})
-        if v is not None:
-            fails.collide(v)
-            return None
-        return _Reach(T, q, above, Q[-1])
-
-    def _first_paths(
-        self,
-        name: str,
-        options: list[tuple[int, float, Array, Array]],
-        near: PlanningScene,
-        free: PlanningScene,
-        fails: _Failures,
-        command: str,
-        part: str,
-        approach: float,
-        after: Sequence[PlanningScene | None] | None = None,
-    ) -> Iterator[tuple[_Reach, PlannedPath]]:
-        """Checked reaches of ``options`` with a planned path to their approach pose, in
-        order (at most a few are tried with the planner); ``after``: per tool pose (the
-        options' first field), the scene once the gripper has opened there."""
-        tried = 0
-        deadline = time.perf_counter() + self._planning.time_limit  # one budget for all
-        for k, _, T, q in options:
-            opened = after[k] if after is not None else None
-            reach = self._checked(name, q, T, approach, near, free, fails, opened)
-            if reach is None:
-                continue
-            try:
-                left = deadline - time.perf_counter()
-                if left <= 0:
-                    return
-                planned = self._plan_joint_path(
-                    name, [reach.q_above], f"{command} '{part}'", time_limit=left
-                )
-            except PlanningError as exc:
-                fails.other = str(exc)
-                tried += 1
-                if tried >= _PATH_TRIES:
-                    return
-                continue
-            yield reach, planned
-            return
-
-    def _no_way(self, fails: _Failures, what: str, part: str, n: int, kind: str) -> Exception:
-        if fails.other and fails.collisions == 0 and fails.unreachable < n:
-            return PlanningError(f"{what}: no collision-free path for '{part}': {fails.other}")
-        if fails.collisions:
-            why = describe(fails.nearest, self._planning.clearance) if fails.nearest else ""
-            extra = f"; {fails.other}" if fails.other else ""
-            return PlanningError(
-                f"{what}: every reachable {kind} of '{part}' collides ({fails.collisions} "
-                f"tried; nearest: {why}){extra}"
-            )
-        return UnreachableError(
-            f"{what}: '{part}' cannot be reached: none of its {n} {kind}s is within reach "
-            f"({fails.reason or fails.other or 'outside the joint limits'})"
-        )
-
     # ------------------------------------------------------------------ place
     def _world_meshes(self) -> Iterator:
         for p in self.cell.static_parts.values():
@@ -415,7 +216,7 @@ class TaskCommands:
         return p[:2]
 
     # ------------------------------------------------------------------ handover
-    def _meeting(self, g: str, r: str, part: str, approach: float) -> tuple[Array, _Reach]:
+    def _meeting(self, g: str, r: str, part: str, approach: float) -> tuple[Array, Reach]:
         """The giver's joints and the receiver's reach at the first meeting pose that works."""
         pg, pr = (self.cell.robots[x].world_base[:3, 3] for x in (g, r))
         across = np.cross([0.0, 0.0, 1.0], pr - pg)
@@ -427,14 +228,14 @@ class TaskCommands:
         both = self._planning_scene([g, r], near=True, grips=[(r, part)])
         giver_alone = self._planning_scene([g])
         qr_now = self.joints(r)
-        fails = _Failures()
+        fails = Failures()
         n = 0
         for f in MEETING_FRACTIONS:
             for dz in MEETING_HEIGHTS:
                 for side in MEETING_SIDES:
                     p = pg + f * (pr - pg) + side * across
                     p[2] = height + dz
-                    for R in _turns(T_now[:3, :3]):
+                    for R in turns(T_now[:3, :3]):
                         n += 1
                         T = np.eye(4)
                         T[:3, :3] = R
@@ -457,8 +258,8 @@ class TaskCommands:
         both: PlanningScene,
         giver_alone: PlanningScene,
         qr_now: Array,
-        fails: _Failures,
-    ) -> tuple[Array, _Reach] | None:
+        fails: Failures,
+    ) -> tuple[Array, Reach] | None:
         try:
             qgs = pose_solutions(self.cell.robots[g], T, self.joints(g))
         except UnreachableError as exc:
@@ -510,8 +311,8 @@ class TaskCommands:
         Tr: Array,
         approach: float,
         both: PlanningScene,
-        fails: _Failures,
-    ) -> _Reach | None:
+        fails: Failures,
+    ) -> Reach | None:
         v = both.violation({g: qg, r: qr})
         if v is not None:
             fails.collide(v)
@@ -525,4 +326,4 @@ class TaskCommands:
             if not both.valid_configs({g: qg, r: qs}):
                 fails.collide(both.violation({g: qg, r: qs}))
                 return None
-        return _Reach(Tr, qr, above, Q[-1])
+        return Reach(Tr, qr, above, Q[-1])
