@@ -200,9 +200,8 @@ class CartesianCommands:
         ``config``: configuration letters to require (e.g. "ru"); default: the
         in-limit solution nearest the current joints. Raises UnreachableError saying why.
         With ``plan``, a collision-free joint path to the nearest solution that has one
-        (see :meth:`~workcell.plan.motion.PlanningCommands.move_joints_absolute`'s
-        planning); PlanningError when the pose is unreachable, every solution is in
-        collision or no path is found.
+        (:mod:`workcell.plan.motion`); PlanningError when the pose is unreachable, every
+        solution is in collision or no path is found.
         """
         name = self._robot(robot)
         target = world_target(T, "move_end_effector", name)

@@ -63,6 +63,12 @@ Several robots at once (beyond the thesis; :mod:`workcell.sim.concurrent`): insi
 ``with sim.concurrently():`` each robot's motion commands start together and the frames
 are merged, so the clock advances by the longest robot's time.
 
+Planning and task level (beyond the thesis; :mod:`workcell.plan`): ``plan=True`` on
+``move_joints_absolute`` and ``move_end_effector`` moves along a collision-free path
+(OMPL), ``pick``, ``place`` and ``handover`` choose poses, configurations and paths
+themselves; a part released in mid-air gets a ``warning`` event, or drops onto what is
+below it with ``open_gripper(..., settle=True)``.
+
 Profiles (``profile``; :mod:`workcell.sim.profiles`): the thesis's constant speed
 ("linear"), or, beyond the thesis, "trapezoid" (``acceleration`` rad/s^2) or "quintic",
 for joint moves and ``move_end_effector``; the simulated clock then runs by the
