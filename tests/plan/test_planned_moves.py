@@ -94,6 +94,8 @@ def test_failures_say_why_and_change_nothing(cell):
     with pytest.raises(PlanningError, match="time limit reached"):
         sim.move_end_effector(ROBOT, ABOVE_2, config="ru", plan=True)
     assert state(sim) == before
-    with pytest.raises(ProgramError, match="clearance must be a finite number > 0"):
+    with pytest.raises(ProgramError, match=r"clearance must be a number in \(0, 1\]"):
         sim.set_planning(clearance=-1.0)
+    with pytest.raises(ProgramError, match=r"time_limit must be a number in \(0, 600\]"):
+        sim.set_planning(time_limit=1e9)
     assert sim.set_planning(time_limit=5.0, seed=3)["seed"] == 3

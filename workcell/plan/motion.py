@@ -40,15 +40,16 @@ from workcell.errors import PlanningError, ProgramError
 from workcell.plan.rrt import plan_path
 from workcell.plan.scene import PlanningScene, Violation
 
-__all__ = ["PlannedPath", "PlanningCommands", "PlanningOptions", "describe"]
+__all__ = ["MAX_TIME", "PlannedPath", "PlanningCommands", "PlanningOptions", "describe"]
 
 Array = NDArray[np.float64]
+MAX_TIME = 600.0  # s: the longest search a planned move may be given
 
 
 @dataclass(frozen=True)
 class PlanningOptions:
-    """How planned moves search (module doc): ``clearance`` (m), ``time_limit`` (s per
-    search), ``seed`` (int); ``near_clearance`` (m): the clearance of the close work of
+    """How planned moves search (module doc): ``clearance`` (m, at most 1), ``time_limit``
+    (s per search, at most :data:`MAX_TIME`), ``seed`` (int); ``near_clearance`` (m): the clearance of the close work of
     task-level commands (grasp, meeting and placing poses, the straight lines in and out),
     where grippers work around parts and each other."""
 
@@ -58,10 +59,10 @@ class PlanningOptions:
     near_clearance: float = 0.001
 
     def __post_init__(self) -> None:
-        for what in ("clearance", "time_limit", "near_clearance"):
+        for what, top in (("clearance", 1.0), ("near_clearance", 1.0), ("time_limit", MAX_TIME)):
             v = getattr(self, what)
-            if not (is_finite_number(v) and v > 0):
-                raise ProgramError(f"planning {what} must be a finite number > 0, got {v!r}")
+            if not (is_finite_number(v) and 0 < v <= top):
+                raise ProgramError(f"planning {what} must be a number in (0, {top:g}], got {v!r}")
         if not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0:
             raise ProgramError(f"planning seed must be an integer >= 0, got {self.seed!r}")
 
