@@ -166,3 +166,22 @@ def test_the_task_level_example_2_runs_unchanged_against_the_server():
                 c.place(pp.ROBOT, pp.CUBE, on=pp.STAGE_1, position=(0.24, 0.22))
     finally:
         srv.stop()
+
+
+@pytest.mark.parametrize(("model", "x"), [("ur5e", 0.5), ("kuka_kr6_r700", 0.45)])
+def test_library_arms_pick_and_place_too(model, x):
+    cell = Workcell("arm_cell")
+    m = cell.model
+    solids.box(m, "table", size=(1.6, 1.6, 0.4))
+    solids.box(m, "stage", size=(0.12, 0.12, 0.1))
+    solids.cube(m, "cube", size=0.04)
+    cell.add_static("table", "table", spatial.translation(-0.8, -0.8, 0.0))
+    cell.add_static("stage_1", "stage", spatial.translation(x - 0.06, 0.2, 0.4))
+    cell.add_movable("cube", "cube", spatial.translation(x - 0.02, -0.22, 0.4), density=2700)
+    cell.add_robot("arm", model, gripper=True, base=spatial.translation(0.0, 0.0, 0.4))
+    sim = Simulator(cell)
+    sim.pick("arm", "cube")
+    sim.place("arm", "cube", on="stage_1")
+    # centroid over the stage's centre (x, 0.26), lowest face on its top (z = 0.5)
+    np.testing.assert_allclose(sim.part_positions()["cube"], [x - 0.02, 0.24, 0.5], atol=1e-6)
+    assert no_collisions(sim) == []
