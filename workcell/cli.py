@@ -93,6 +93,7 @@ TITLES = {
     "joints": "the thesis's example 1 (ch. 5): one Puma 260 moved in joint space",
     "pick-place": "the thesis's example 2 (ch. 5): pick and place with one Puma 260",
     "handoff": "the thesis's example 3 (ch. 5): two Puma 260s hand a sphere over",
+    "obstacle": "beyond the thesis: a wall between two stages, direct against pick/place",
 }
 
 
@@ -198,6 +199,21 @@ def _demo(args: argparse.Namespace) -> int:
         from workcell.errors import ProgramError
 
         raise ProgramError(f"--dt must be > 0 s, got {args.dt}")
+    if args.example == "obstacle":
+        from workcell.examples.obstacle import demo
+
+        if args.physics:
+            from workcell.errors import ProgramError
+
+            raise ProgramError("demo obstacle has no --physics run; try demo pick-place --physics")
+        return demo(
+            args.mode,
+            args.dt,
+            render=args.render,
+            as_json=args.json,
+            save=args.save,
+            mjcf=args.mjcf,
+        )
     return _demo_cell(args)
 
 
@@ -217,8 +233,10 @@ def _export_cell(args: argparse.Namespace) -> int:
 
     cell = load_cell(args.cell)
     cell.save(args.out)
-    print(f"wrote {args.out} (cell '{cell.name}': {len(cell.robots)} robot(s), "
-          f"{len(cell.static_parts)} static and {len(cell.movable_parts)} movable part(s))")
+    print(
+        f"wrote {args.out} (cell '{cell.name}': {len(cell.robots)} robot(s), "
+        f"{len(cell.static_parts)} static and {len(cell.movable_parts)} movable part(s))"
+    )
     return 0
 
 
@@ -257,7 +275,8 @@ def main(argv: list[str] | None = None) -> int:
         "example",
         choices=["solids", *CELLS],
         help="solids: the thesis's example solids (ch. 2-3); joints, pick-place, handoff: "
-        "its three example workcells (ch. 5)",
+        "its three example workcells (ch. 5); obstacle: a wall between two stages, the "
+        "direct program against pick/place",
     )
     demo.add_argument(
         "--mode",

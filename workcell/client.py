@@ -58,6 +58,7 @@ _KEEPS_CELL = frozenset(
     {
         "cell_data", "set_speed", "set_mode", "move_joints_absolute", "move_joints_relative",
         "move_end_effector", "move_straight_line", "close_gripper", "open_gripper", "wait",
+        "pick", "place", "handover", "set_planning",
         "play", "joints", "tool_pose", "held", "clearance", "summary", "part_positions",
         "robots", "frames", "sim_time", "events", "hello", "part_pose", "gripper_pose",
         "speed", "trajectory", "wall_time", "concurrently_begin", "concurrently_end",
@@ -188,17 +189,22 @@ class Client:
         """Switch mode: "path", "joint-by-joint" or "playback"."""
         self.call("set_mode", mode=mode)
 
-    def move_joints_absolute(self, robot: str, q: ArrayLike | str) -> None:
-        """Move the joints to ``q`` (rad/m), or to a named pose of the robot ("home")."""
-        self.call("move_joints_absolute", robot=robot, q=_list(q))
+    def move_joints_absolute(
+        self, robot: str, q: ArrayLike | str, *, plan: bool = False
+    ) -> None:
+        """Move the joints to ``q`` (rad/m), or to a named pose of the robot ("home");
+        ``plan``: along a collision-free path."""
+        self.call("move_joints_absolute", robot=robot, q=_list(q), plan=plan)
 
     def move_joints_relative(self, robot: str, dq: ArrayLike) -> None:
         """Move the joints by ``dq`` (rad/m)."""
         self.call("move_joints_relative", robot=robot, dq=_list(dq))
 
-    def move_end_effector(self, robot: str, T: ArrayLike, config: str | None = None) -> None:
-        """Move the tool to world pose ``T`` (4x4, m)."""
-        self.call("move_end_effector", robot=robot, T=_list(T), config=config)
+    def move_end_effector(
+        self, robot: str, T: ArrayLike, config: str | None = None, *, plan: bool = False
+    ) -> None:
+        """Move the tool to world pose ``T`` (4x4, m); ``plan``: along a collision-free path."""
+        self.call("move_end_effector", robot=robot, T=_list(T), config=config, plan=plan)
 
     def move_straight_line(self, robot: str, T: ArrayLike, step: float = 0.005) -> None:
         """Move the tool along a straight line to ``T`` (4x4), samples ``step`` (m) apart."""
@@ -212,9 +218,47 @@ class Client:
             "close_gripper", robot=robot, max_distance=max_distance, max_angle=max_angle
         )
 
-    def open_gripper(self, robot: str) -> str | None:
-        """Release the part held (its name, or None)."""
-        return self.call("open_gripper", robot=robot)
+    def open_gripper(self, robot: str, *, settle: bool = False) -> str | None:
+        """Release the part held (its name, or None); ``settle``: drop it onto its support."""
+        return self.call("open_gripper", robot=robot, settle=settle)
+
+    def set_planning(
+        self,
+        *,
+        clearance: float | None = None,
+        time_limit: float | None = None,
+        seed: int | None = None,
+        near_clearance: float | None = None,
+    ) -> dict[str, float]:
+        """Change how planned moves search (m, s, seed); the settings in force."""
+        return self.call(
+            "set_planning",
+            clearance=clearance,
+            time_limit=time_limit,
+            seed=seed,
+            near_clearance=near_clearance,
+        )
+
+    def pick(self, robot: str, part: str, *, approach: float = 0.08) -> str:
+        """Grasp ``part`` (grasp, configuration and collision-free path chosen by the server)."""
+        return self.call("pick", robot=robot, part=part, approach=approach)
+
+    def place(
+        self,
+        robot: str,
+        part: str,
+        *,
+        on: str,
+        position: ArrayLike | None = None,
+        approach: float = 0.08,
+    ) -> None:
+        """Put the held ``part`` down resting on ``on``, centroid over ``position`` (x, y m)."""
+        pos = None if position is None else _list(np.asarray(position, dtype=np.float64)[:2])
+        self.call("place", robot=robot, part=part, on=on, position=pos, approach=approach)
+
+    def handover(self, giver: str, receiver: str, part: str, *, approach: float = 0.08) -> None:
+        """Hand ``part`` from ``giver`` to ``receiver`` at a meeting pose the server finds."""
+        self.call("handover", giver=giver, receiver=receiver, part=part, approach=approach)
 
     def wait(self, seconds: float) -> None:
         """Let ``seconds`` of simulated time pass."""

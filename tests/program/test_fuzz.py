@@ -119,6 +119,7 @@ def fuzz_session(base_dir) -> Session:
     s.execute(cmd.CreateEntity("object", "o1"))
     s.execute(sol.CreateBox("spare", (0.1, 0.1, 0.1)))
     s.execute(simc.Simulate("path", 0.05))
+    s.execute(simc.SetPlanning(time_limit=0.5))  # a failing search gives up soon
     return s
 
 
@@ -132,6 +133,7 @@ def too_slow(c: object) -> bool:
         or (isinstance(c, simc.Simulate) and (c.dt < 0.01 or c.realtime))
         or (isinstance(c, simc.Play) and c.realtime)
         or (isinstance(c, simc.MoveStraightLine) and c.step < 1e-3)
+        or (isinstance(c, simc.SetPlanning) and (c.time_limit or 0) > 0.5)
     )
 
 

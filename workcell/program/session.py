@@ -98,7 +98,7 @@ class Session:
         if self.cell is None:
             raise ProgramError(
                 "no cell yet: start one with 'cell new NAME', 'cell load FILE' or "
-                "'cell example joints|pick-place|handoff'"
+                "'cell example joints|pick-place|handoff|obstacle'"
             )
         return self.cell
 

@@ -35,6 +35,7 @@ __all__ = [
     "Events",
     "Frames",
     "GripperPose",
+    "Handover",
     "Held",
     "Joints",
     "MoveEndEffector",
@@ -44,9 +45,12 @@ __all__ = [
     "OpenGripper",
     "PartPose",
     "PartPositions",
+    "Pick",
+    "Place",
     "Play",
     "Robots",
     "SetMode",
+    "SetPlanning",
     "SetSpeed",
     "SimTime",
     "Simulate",
@@ -138,14 +142,16 @@ _joints_or_pose.label = "number[] | name"  # type: ignore[attr-defined]
 
 @dataclass(frozen=True)
 class MoveJointsAbsolute(Command, wire="move_joints_absolute"):
-    """Move a robot's joints to ``q`` (rad/m), or to a named pose of the robot ("home")."""
+    """Move a robot's joints to ``q`` (rad/m), or to a named pose of the robot ("home");
+    ``plan``: along a collision-free path."""
 
     robot: str = arg(a.name)
     q: tuple[float, ...] | str = arg(_joints_or_pose, doc="rad/m")
+    plan: bool = arg(a.boolean, False)
 
     def execute(self, session: Session) -> None:
         q = self.q if isinstance(self.q, str) else np.array(self.q)
-        _call(session, "move_joints_absolute", self.robot, q)
+        _call(session, "move_joints_absolute", self.robot, q, plan=self.plan)
 
 
 @dataclass(frozen=True)
@@ -162,15 +168,17 @@ class MoveJointsRelative(Command, wire="move_joints_relative"):
 @dataclass(frozen=True)
 class MoveEndEffector(Command, wire="move_end_effector"):
     """Move the tool to pose ``T`` (IK, then linear in joints); ``config`` picks the Puma
-    solution (three letters l|r, u|d, n|f; default: the nearest)."""
+    solution (three letters l|r, u|d, n|f; default: the nearest); ``plan``: along a
+    collision-free path."""
 
     robot: str = arg(a.name)
     T: Target = arg(target)  # noqa: RUF009 - arg() returns a dataclasses.field
     config: str | None = arg(a.optional(a.name), None)
+    plan: bool = arg(a.boolean, False)
 
     def execute(self, session: Session) -> None:
         T = self.T.resolve(session, self.robot)
-        _call(session, "move_end_effector", self.robot, T, config=self.config)
+        _call(session, "move_end_effector", self.robot, T, config=self.config, plan=self.plan)
 
 
 @dataclass(frozen=True)
@@ -207,12 +215,87 @@ class CloseGripper(Command, wire="close_gripper"):
 
 @dataclass(frozen=True)
 class OpenGripper(Command, wire="open_gripper"):
-    """Open the gripper; returns the part released (or null)."""
+    """Open the gripper; returns the part released (or null); ``settle``: a part released
+    in mid-air drops onto the highest support below it."""
 
     robot: str = arg(a.name)
+    settle: bool = arg(a.boolean, False)
 
     def execute(self, session: Session) -> Any:
-        return _call(session, "open_gripper", self.robot)
+        return _call(session, "open_gripper", self.robot, settle=self.settle)
+
+
+@dataclass(frozen=True)
+class SetPlanning(Command, wire="set_planning"):
+    """Change how planned moves search: ``clearance`` and ``near_clearance`` (m),
+    ``time_limit`` (s), ``seed``; null keeps a setting. Returns the settings in force."""
+
+    clearance: float | None = arg(a.optional(a.number), None, "m")
+    time_limit: float | None = arg(a.optional(a.number), None, "s")
+    seed: int | None = arg(a.optional(a.count), None)
+    near_clearance: float | None = arg(a.optional(a.number), None, "m")
+
+    def execute(self, session: Session) -> Any:
+        return _call(
+            session,
+            "set_planning",
+            clearance=self.clearance,
+            time_limit=self.time_limit,
+            seed=self.seed,
+            near_clearance=self.near_clearance,
+        )
+
+
+@dataclass(frozen=True)
+class Pick(Command, wire="pick"):
+    """Pick ``part`` with ``robot``: grasp chosen automatically, collision-free approach,
+    grasp, retreat ``approach`` (m) along the tool axis; returns the part's name."""
+
+    robot: str = arg(a.name)
+    part: str = arg(a.name)
+    approach: float = arg(a.number, 0.08, "m")
+
+    def execute(self, session: Session) -> Any:
+        return _call(session, "pick", self.robot, self.part, approach=self.approach)
+
+
+@dataclass(frozen=True)
+class Place(Command, wire="place"):
+    """Put ``part`` (held by ``robot``) down on the part ``on``, its centroid over
+    ``position`` (x, y in m; null: the centre of the support's top face); released,
+    retreat ``approach`` (m)."""
+
+    robot: str = arg(a.name)
+    part: str = arg(a.name)
+    on: str = arg(a.name)
+    position: tuple[float, ...] | None = arg(a.optional(a.sized(2)), None, "m")
+    approach: float = arg(a.number, 0.08, "m")
+
+    def execute(self, session: Session) -> None:
+        pos = None if self.position is None else np.array(self.position)
+        _call(
+            session,
+            "place",
+            self.robot,
+            self.part,
+            on=self.on,
+            position=pos,
+            approach=self.approach,
+        )
+
+
+@dataclass(frozen=True)
+class Handover(Command, wire="handover"):
+    """Hand ``part`` from ``giver`` to ``receiver`` at a meeting pose found in both
+    workspaces; both back off ``approach`` (m) afterwards."""
+
+    giver: str = arg(a.name)
+    receiver: str = arg(a.name)
+    part: str = arg(a.name)
+    approach: float = arg(a.number, 0.08, "m")
+
+    def execute(self, session: Session) -> None:
+        _call(session, "handover", self.giver, self.receiver, self.part, approach=self.approach)
 
 
 @dataclass(frozen=True)

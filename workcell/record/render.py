@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import copy
 import io
+import itertools
 import math
 import os
 from collections.abc import Iterator, Sequence
@@ -173,8 +174,14 @@ class CellRenderer:
         cam.type, cam.fixedcamid = mujoco.mjtCamera.mjCAMERA_FIXED, cid
         return cam
 
-    def render(self, data: mujoco.MjData, camera: str | mujoco.MjvCamera) -> NDArray[np.uint8]:
-        """An (H, W, 3) uint8 picture of ``data`` (poses as computed by mj_forward)."""
+    def render(
+        self,
+        data: mujoco.MjData,
+        camera: str | mujoco.MjvCamera,
+        paths: Sequence[tuple[NDArray[np.float64], Sequence[float]]] = (),
+    ) -> NDArray[np.uint8]:
+        """An (H, W, 3) uint8 picture of ``data`` (poses as computed by mj_forward);
+        ``paths``: polylines drawn over the cell, each (points (k, 3) m, RGBA)."""
         if self._mjr is None:
             raise RenderError("the renderer is closed")
         cam = self.camera(camera) if isinstance(camera, str) else camera
@@ -185,6 +192,8 @@ class CellRenderer:
         self.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
         self.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = True
         self._add_grid()
+        for points, rgba in paths:
+            self._add_path(np.asarray(points, dtype=np.float64), rgba)
         self._set_lights()
         # fog (m): from just past the cell to a few extents behind it, whatever the camera
         ext = max(float(self.model.stat.extent), 0.1)
@@ -232,6 +241,28 @@ class CellRenderer:
             )
             mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_LINE, 1.0, a, b)
         scn.ngeom += n
+
+    def _add_path(self, points: NDArray[np.float64], rgba: Sequence[float]) -> None:
+        """A polyline as thin capsules (scene-only geoms), at most 400 segments."""
+        scn = self.scene
+        if len(points) > 401:
+            points = points[np.linspace(0, len(points) - 1, 401).round().astype(int)]
+        radius = 0.004 * max(float(self.model.stat.extent), 0.1)
+        colour = np.asarray(rgba, dtype=np.float32)
+        for a, b in itertools.pairwise(points):
+            if scn.ngeom >= scn.maxgeom or np.allclose(a, b):
+                continue
+            g = scn.geoms[scn.ngeom]
+            mujoco.mjv_initGeom(
+                g,
+                mujoco.mjtGeom.mjGEOM_CAPSULE,
+                np.zeros(3),
+                np.zeros(3),
+                np.eye(3).ravel(),
+                colour,
+            )
+            mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_CAPSULE, radius, a, b)
+            scn.ngeom += 1
 
     def close(self) -> None:
         """Free the GL resources (idempotent)."""

@@ -143,11 +143,14 @@ class GripperCommands:
             )
         return part
 
-    def open_gripper(self, robot: str) -> str | None:
+    def open_gripper(self, robot: str, *, settle: bool = False) -> str | None:
         """Open the robot's gripper; release the part it holds (returned; None if empty).
 
         A released part stays where it is, unless another robot holds it too (a handoff):
-        that robot carries it from now on.
+        that robot carries it from now on. Released in mid-air (more than the contact
+        tolerance above what is below it), it gets a ``warning`` event; with ``settle`` it
+        drops straight onto the highest support below it instead, in one frame
+        (:mod:`workcell.plan.resting`).
         """
         name = self._robot(robot)
         self._not_in_block("open_gripper")
@@ -187,6 +190,7 @@ class GripperCommands:
                     "release",
                     f"release '{hold.part}': centroid ({where}) m{to}",
                 )
+                self._after_release(name, hold.part, bool(settle))
         return None if hold is None else hold.part
 
     def _gripper_id(self, name: str, command: str) -> int:
