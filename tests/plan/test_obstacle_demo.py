@@ -31,7 +31,7 @@ def test_demo_lists_the_direct_collisions_and_runs_pick_place_clean(tmp_path, ca
     x, y = obstacle.STAGE_CENTRES[obstacle.STAGE_2]
     half = obstacle.CUBE_SIZE / 2
     top = obstacle.TABLE_TOP + obstacle.STAGE_SIZE[2]
-    np.testing.assert_allclose(cube, [x - half, y - half, top], atol=1e-6)
+    np.testing.assert_allclose(cube, [x, y, top + half], atol=1e-6)  # its centroid
     img = np.asarray(Image.open(png).convert("RGB")).astype(int)
     r, g, b = img[..., 0], img[..., 1], img[..., 2]
     assert ((r > 150) & (g < 90) & (b < 90)).sum() > 200  # the direct path, red

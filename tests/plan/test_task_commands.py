@@ -68,7 +68,7 @@ def test_picks_and_places_from_the_command_language(tmp_path):
         for c in parse_line(line, s):
             s.execute(c)
     # the cube's centroid over (0.26, 0.2), resting on the stage's top (z = 0.5)
-    np.testing.assert_allclose(s.sim.part_positions()["cube"], [0.24, 0.18, 0.5], atol=1e-6)
+    np.testing.assert_allclose(s.sim.part_positions()["cube"], [0.26, 0.2, 0.52], atol=1e-6)
     assert no_collisions(s.sim) == []
 
 
@@ -91,11 +91,11 @@ def test_a_part_placed_in_a_bin_rests_on_its_floor():
     sim.place(pp.ROBOT, pp.CUBE, on="bin_1")
     floor = pp.TABLE_TOP + 0.01  # the bin's floor is 10 mm thick
     x, y, z = sim.part_positions()[pp.CUBE]
-    # the cube's frame is its lowest corner; it rests on the bin's collision pieces, which
+    # (x, y, z) is the cube's centroid; it rests on the bin's collision pieces, which
     # CoACD fits to the surface within ~25 um here (test_decompose bounds them by 50 um)
-    assert z == pytest.approx(floor, abs=5e-5)
+    assert z - 0.02 == pytest.approx(floor, abs=5e-5)
     # centroid over the centre of the bin's rim
-    np.testing.assert_allclose([x + 0.02, y + 0.02], [0.24, 0.12], atol=1e-6)
+    np.testing.assert_allclose([x, y], [0.24, 0.12], atol=1e-6)
     assert no_collisions(sim) == []
 
 
@@ -183,5 +183,5 @@ def test_library_arms_pick_and_place_too(model, x):
     sim.pick("arm", "cube")
     sim.place("arm", "cube", on="stage_1")
     # centroid over the stage's centre (x, 0.26), lowest face on its top (z = 0.5)
-    np.testing.assert_allclose(sim.part_positions()["cube"], [x - 0.02, 0.24, 0.5], atol=1e-6)
+    np.testing.assert_allclose(sim.part_positions()["cube"], [x, 0.26, 0.52], atol=1e-6)
     assert no_collisions(sim) == []
