@@ -1,5 +1,6 @@
 """Robots (thesis ch. 4.2-4.3): serial chains, the library of built-in arms, robots read from URDF and MJCF files, grippers, forward and inverse kinematics."""
 
+from workcell.robots.arm_geometry import chain_geometry
 from workcell.robots.chain import DH, Joint
 from workcell.robots.gripper import Gripper, GripperPart, attach_gripper, parallel_gripper
 from workcell.robots.library import get, library
@@ -18,6 +19,7 @@ __all__ = [
     "Robot",
     "RobotFile",
     "attach_gripper",
+    "chain_geometry",
     "from_mjcf",
     "from_urdf",
     "get",

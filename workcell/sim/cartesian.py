@@ -27,8 +27,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from workcell import limits
 from workcell.cell.workcell import RobotPlacement
-from workcell.checks import is_finite_number
-from workcell.errors import GeometryError, KinematicsError, ProgramError, UnreachableError
+from workcell.checks import is_finite_number, quote_angle, quote_length
+from workcell.errors import (
+    GeometryError,
+    KinematicsError,
+    PlanningError,
+    ProgramError,
+    UnreachableError,
+)
 from workcell.robots.ik_closed import config_of, ik_report
 from workcell.sim.planning import plan_waypoints
 from workcell.spatial import angle_between, as_transform, invert
@@ -37,6 +43,7 @@ __all__ = [
     "CartesianCommands",
     "line_deviation",
     "line_waypoints",
+    "pose_solutions",
     "solve_pose",
     "world_target",
 ]
@@ -53,7 +60,7 @@ def world_target(T: ArrayLike, command: str, robot: str) -> Array:
         raise KinematicsError(str(exc)) from exc
 
 
-def _closed_form(placement: RobotPlacement, Tb: Array, q: Array, config: str | None) -> Array:
+def _closed_form(placement: RobotPlacement, Tb: Array, q: Array, config: str | None) -> list[Array]:
     sols, reason = ik_report(placement.robot, Tb, q)
     ok = [s for s in sols if s.within_limits]
     if config is not None:
@@ -68,19 +75,19 @@ def _closed_form(placement: RobotPlacement, Tb: Array, q: Array, config: str | N
             )
     if not ok:
         raise UnreachableError(reason or "no solution within the joint limits")
-    return min(ok, key=lambda s: float(np.abs(s.q - q).max())).q
+    return [s.q for s in sorted(ok, key=lambda s: float(np.abs(s.q - q).max()))]
 
 
-def solve_pose(
+def pose_solutions(
     placement: RobotPlacement, T_world: Array, q_current: Array, config: str | None = None
-) -> Array:
-    """Joint values (rad/m) putting the tool at ``T_world``, nearest to ``q_current``.
+) -> list[Array]:
+    """Every joint solution (rad/m) putting the tool at ``T_world`` within the limits,
+    nearest to ``q_current`` first (in the largest joint change, so the one a joint move
+    reaches soonest: eq. 4.27's duration is proportional to it).
 
-    Nearest in the largest joint change, so the one a joint move reaches soonest
-    (eq. 4.27's duration is proportional to it).
-
-    ``config``: configuration letters to require (any of l|r, u|d, n|f, e.g. "ru").
-    Raises UnreachableError with the reason.
+    Closed-form families (``Robot.ik_family``) give all of them; other robots give the
+    one :meth:`Robot.ik` finds from ``q_current``. ``config``: configuration letters to
+    require (any of l|r, u|d, n|f, e.g. "ru"). Raises UnreachableError with the reason.
     """
     robot = placement.robot
     Tb = invert(placement.base) @ T_world
@@ -95,7 +102,15 @@ def solve_pose(
     sol = robot.ik(Tb, q_current, config=config)
     if not sol.success:
         raise UnreachableError(sol.reason or "numerical IK did not converge")
-    return sol.q
+    return [sol.q]
+
+
+def solve_pose(
+    placement: RobotPlacement, T_world: Array, q_current: Array, config: str | None = None
+) -> Array:
+    """The joint values (rad/m) putting the tool at ``T_world`` nearest to ``q_current``:
+    the first of :func:`pose_solutions`. Raises UnreachableError with the reason."""
+    return pose_solutions(placement, T_world, q_current, config)[0]
 
 
 def _slerp(R0: Array, R1: Array, s: Array) -> Array:
@@ -138,6 +153,8 @@ def line_waypoints(
         "max_frames_per_command", length / step, f"a {length:.4g} m line sampled every {step:g} m"
     )
     n = max(1, math.ceil(length / step - 1e-9), math.ceil(angle / _ANGLE_STEP - 1e-9))
+    # each sample becomes at least one frame: refused before anything is allocated
+    limits.check("max_frames_per_command", n, f"a {length:.6g} m line sampled every {step:g} m")
     s = np.arange(1, n + 1) / n
     poses = np.repeat(np.eye(4)[None], n, axis=0)
     poses[:, :3, :3] = _slerp(T_start[:3, :3], T_goal[:3, :3], s)
@@ -181,19 +198,29 @@ def line_deviation(placement: RobotPlacement, Q: Array, p0: Array, p1: Array) ->
 class CartesianCommands:
     """``move_end_effector`` and ``move_straight_line`` (a mixin of Simulator)."""
 
-    def move_end_effector(self, robot: str, T: ArrayLike, config: str | None = None) -> None:
+    def move_end_effector(
+        self, robot: str, T: ArrayLike, config: str | None = None, *, plan: bool = False
+    ) -> None:
         """Move the tool to the world pose ``T`` (4x4, m): IK, then linear in joints.
 
         ``config``: configuration letters to require (e.g. "ru"); default: the
         in-limit solution nearest the current joints. Raises UnreachableError saying why.
+        With ``plan``, a collision-free joint path to the nearest solution that has one
+        (:mod:`workcell.plan.motion`); PlanningError when the pose is unreachable, every
+        solution is in collision or no path is found.
         """
         name = self._robot(robot)
         target = world_target(T, "move_end_effector", name)
         try:
-            q = solve_pose(self.cell.robots[name], target, self.joints(name), config)
+            sols = pose_solutions(self.cell.robots[name], target, self.joints(name), config)
         except UnreachableError as exc:
+            if plan:
+                raise PlanningError(f"move_end_effector '{name}': goal unreachable: {exc}") from exc
             raise UnreachableError(f"move_end_effector '{name}': {exc}") from exc
-        self._move(name, q, "move_end_effector")
+        if plan:
+            self._move_planned(name, sols, "move_end_effector")
+        else:
+            self._move(name, sols[0], "move_end_effector")
 
     def move_straight_line(
         self, robot: str, T: ArrayLike, step: float = 0.005, *, max_jump: float = math.radians(10)
@@ -207,9 +234,11 @@ class CartesianCommands:
         """
         name = self._robot(robot)
         target = world_target(T, "move_straight_line", name)
-        for what, v in (("step", step), ("max_jump", max_jump)):
+        for what, v, quote in (("step", step, quote_length), ("max_jump", max_jump, quote_angle)):
             if not (is_finite_number(v) and v > 0):
-                raise ProgramError(f"move_straight_line '{name}': {what} must be > 0, got {v!r}")
+                raise ProgramError(
+                    f"move_straight_line '{name}': {what} must be > 0, got {quote(v)}"
+                )
         placement = self.cell.robots[name]
         start = self.tool_pose(name)
         q0 = self.joints(name)
