@@ -124,8 +124,9 @@ def test_the_parallel_gripper_of_the_file_is_kept(arm_file, arm):
     tips = [p.vertices(g.model)[:, 2].max() for p in default.gripper.geometry if p.role != "palm"]
     np.testing.assert_allclose(default.gripper.tcp[:3, 3], [0, 0, max(tips) - 0.04 / 4], atol=1e-12)
     # the hand is turned 30 deg about z: the gripper frame is the palm's
-    np.testing.assert_allclose(default.gripper.mount[:3, :3], spatial.rot_z(np.radians(30))[:3, :3],
-                               atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        default.gripper.mount[:3, :3], spatial.rot_z(np.radians(30))[:3, :3], atol=1e-12
+    )
     assert from_mjcf(arm_file, gripper=False).gripper is None
 
 
@@ -149,8 +150,12 @@ def test_an_imported_arm_runs_a_pick_in_a_cell(arm):
 
 def test_include_files_and_geometry_false(tmp_path):
     write_meshes(tmp_path)
-    write(tmp_path, "more.xml", '<mujoco><worldbody><body name="x" pos="1 0 0">'
-          '<joint name="jx"/><geom size="0.1"/></body></worldbody></mujoco>')  # fmt: skip
+    write(
+        tmp_path,
+        "more.xml",
+        '<mujoco><worldbody><body name="x" pos="1 0 0">'
+        '<joint name="jx"/><geom size="0.1"/></body></worldbody></mujoco>',
+    )
     f = write(
         tmp_path, "arm.xml", arm_mjcf().replace("</mujoco>", '<include file="more.xml"/></mujoco>')
     )
@@ -176,7 +181,9 @@ def _bad(tmp_path, text: str) -> Path:
             "body 'l2'.*ball joint",
         ),
         (
-            lambda s: s.replace('<joint name="j1"/>', '<joint name="j1"/><joint name="j1b" axis="1 0 0"/>'),
+            lambda s: s.replace(
+                '<joint name="j1"/>', '<joint name="j1"/><joint name="j1b" axis="1 0 0"/>'
+            ),
             "body 'l1'.*2 joints",
         ),
         (

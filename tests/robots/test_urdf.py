@@ -92,8 +92,9 @@ def test_a_branch_off_the_chain_is_left_out_with_a_warning(arm_file):
 @given(st.lists(st.floats(0.0, 1.0), min_size=5, max_size=5))
 def test_fk_equals_yourdfpy(arm_file, arm, u):
     q = arm.lower + np.array(u) * (arm.upper - arm.lower)
-    ref = yourdfpy.URDF.load(str(arm_file), load_meshes=False, build_scene_graph=True,
-                             load_collision_meshes=False)  # fmt: skip
+    ref = yourdfpy.URDF.load(
+        str(arm_file), load_meshes=False, build_scene_graph=True, load_collision_meshes=False
+    )
     ref.update_cfg(dict(zip([j.name for j in arm.joints], q, strict=True)))
     np.testing.assert_allclose(arm.fk(q), ref.get_transform("tool0", "base_link"), atol=1e-9)
 
@@ -396,12 +397,15 @@ def test_ros_industrial_files_match_yourdfpy_and_their_family(which):
     path = RTB / RTB_FILES[which]
     robot = quiet(path, geometry=False)
     assert robot.dof == 6
-    ref = yourdfpy.URDF.load(str(path), load_meshes=False, build_scene_graph=True,
-                             load_collision_meshes=False)  # fmt: skip
+    ref = yourdfpy.URDF.load(
+        str(path), load_meshes=False, build_scene_graph=True, load_collision_meshes=False
+    )
     worst = 0.0
     for q in random_q(robot, 100, seed=2):
         ref.update_cfg(dict(zip([j.name for j in robot.joints], q, strict=True)))
-        worst = max(worst, float(np.abs(ref.get_transform("tool0", "base_link") - robot.fk(q)).max()))
+        worst = max(
+            worst, float(np.abs(ref.get_transform("tool0", "base_link") - robot.fk(q)).max())
+        )
     assert worst < 1e-9
     # the KUKA files are OPW arms; this IRB 140 file's axis 6 misses axis 5 by 20 mm
     assert robot.ik_family == (None if which == "irb140" else "opw")
@@ -442,4 +446,3 @@ def test_ros_industrial_files_place_in_a_cell(which):
     if which == "kr16":  # KUKA orange from the DAE files' materials
         colours = [g.colour for g in robot.geometry if g.colour is not None]
         assert any(c[0] > 0.4 and c[2] < 0.2 for c in colours)
-

@@ -20,7 +20,9 @@ letters, digits, '_' or '-' (no '.', which separates robot prefixes in the compi
 model, and no '/', which dm_control reserves). A failed ``add_*`` changes nothing.
 
 Saved as versioned JSON (``format: "workcell-cell", version: 1``); the model through
-:meth:`Model.to_dict`, robots as their built-in name plus gripper parameters.
+:meth:`Model.to_dict`, robots as their built-in name, their robot file (path relative
+to the cell file, sha256, import options) or their chain inline
+(:mod:`workcell.cell.robot_json`), plus gripper parameters.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import os
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
@@ -38,6 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell import limits
+from workcell.cell.robot_json import robot_from_json, robot_json
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, ModelError, WorkcellError
 from workcell.files import atomic_write_text, load_json
@@ -140,8 +144,9 @@ class RobotPlacement:
     ``robot`` as built (gripper attached if any); ``base`` (4x4) the world pose of the
     robot's base frame, so the world pose of its tool is ``base @ robot.fk(q)``; ``q``
     the initial joint values (rad/m). ``builtin`` names the library robot it came from
-    ("ur5e", "puma260", ...; None for a custom robot) and ``gripper_parameters`` the
-    :func:`parallel_gripper` arguments (None: no gripper, or a custom one).
+    ("ur5e", "puma260", ...; None for a custom robot), ``gripper_parameters`` the
+    :func:`parallel_gripper` arguments the cell attached (None: no gripper, or the
+    robot's own) and ``bare`` the Robot as given before that (None: ``robot``).
     """
 
     name: str
@@ -150,6 +155,7 @@ class RobotPlacement:
     q: Array
     builtin: str | None = None
     gripper_parameters: Mapping[str, Any] | None = field(default=None)
+    bare: Robot | None = None
 
     @property
     def world_base(self) -> Array:
@@ -385,7 +391,8 @@ class Workcell:
         parameters, or None for none (a ``Robot`` may already carry one). ``base`` (4x4
         rigid) places the robot's base frame in the world. ``q`` (rad/m) defaults to the
         robot's "home" pose if it has one, else zeros; it must lie within the limits.
-        A custom ``Robot`` works in memory but cannot be saved yet.
+        Any Robot is saved with the cell (:mod:`workcell.cell.robot_json`: a robot read
+        from a file as its file, others inline).
         """
         name = self._new_name(name, "robot")
         what = f"robot '{name}'"
@@ -411,7 +418,6 @@ class Workcell:
                     if params is not None
                     else robot
                 )
-                params = None
             else:
                 raise ModelError(f"robot must be a built-in name or a Robot, got {robot!r}")
         except WorkcellError as exc:
@@ -424,7 +430,8 @@ class Workcell:
             qv = r.check_limits(q0).copy()
         except WorkcellError as exc:
             raise ModelError(f"{what}: initial q: {exc}") from exc
-        placed = RobotPlacement(name, r, B, qv, builtin, params)
+        bare = robot if isinstance(robot, Robot) and r is not robot else None
+        placed = RobotPlacement(name, r, B, qv, builtin, params, bare)
         self._robots[name] = placed
         return placed
 
@@ -479,24 +486,24 @@ class Workcell:
         return translation(*self.model.properties(p.entity).centroid)
 
     # ------------------------------------------------------------------ storage
-    def to_dict(self) -> dict:
-        """The cell as JSON-able data; ModelError for a custom (non built-in) robot."""
+    def to_dict(self, base_dir: str | os.PathLike | None = None) -> dict:
+        """The cell as JSON-able data. A robot is its library name, its robot file
+        (path relative to ``base_dir`` when given, else absolute) or its chain inline
+        (:mod:`workcell.cell.robot_json`); ModelError for one that cannot be saved."""
         robots = []
+        folder = None if base_dir is None else Path(os.path.abspath(base_dir))
         for r in self._robots.values():
-            if r.builtin is None:
-                raise ModelError(
-                    f"robot '{r.name}' is a custom Robot; only built-in robots "
-                    f"({', '.join(BUILTIN_ROBOTS)}) with parallel grippers can be saved for now"
-                )
-            robots.append(
-                {
-                    "name": r.name,
-                    "builtin": r.builtin,
-                    "gripper": None if r.gripper_parameters is None else dict(r.gripper_parameters),
-                    "base": r.base.tolist(),
-                    "q": r.q.tolist(),
-                }
-            )
+            entry: dict[str, Any] = {"name": r.name}
+            if r.builtin is not None:
+                entry["builtin"] = r.builtin
+            else:
+                try:
+                    entry.update(robot_json(r.bare or r.robot, folder))
+                except ModelError as exc:
+                    raise ModelError(f"robot '{r.name}' cannot be saved: {exc}") from exc
+            entry["gripper"] = None if r.gripper_parameters is None else dict(r.gripper_parameters)
+            entry["base"], entry["q"] = r.base.tolist(), r.q.tolist()
+            robots.append(entry)
         return {
             "format": FORMAT,
             "version": VERSION,
@@ -534,8 +541,20 @@ class Workcell:
         }
 
     @classmethod
-    def from_dict(cls, data: object, *, source: str = "cell data") -> Workcell:
-        """Rebuild a cell from :meth:`to_dict` data; ModelError naming the faulty place."""
+    def from_dict(
+        cls,
+        data: object,
+        *,
+        source: str = "cell data",
+        base_dir: str | os.PathLike | None = None,
+        root: str | os.PathLike | None = None,
+    ) -> Workcell:
+        """Rebuild a cell from :meth:`to_dict` data; ModelError naming the faulty place.
+
+        Robot file paths are relative to ``base_dir`` (absolute when None); with ``root``
+        (a server's folder) no robot file outside it is read.
+        """
+        folder = None if base_dir is None else Path(os.path.abspath(base_dir))
 
         def fail(where: str, exc: BaseException | str) -> ModelError:
             return ModelError(f"{source}: {where}: {exc}")
@@ -583,7 +602,11 @@ class Workcell:
             (
                 "robots",
                 lambda e: cell.add_robot(
-                    e["name"], e["builtin"], gripper=e.get("gripper"), base=e["base"], q=e["q"]
+                    e["name"],
+                    e["builtin"] if "builtin" in e else robot_from_json(e, folder, root),
+                    gripper=e.get("gripper"),
+                    base=e["base"],
+                    q=e["q"],
                 ),
             ),
             (
@@ -615,16 +638,20 @@ class Workcell:
         return cell
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write the cell as versioned JSON, atomically; a failed write raises ModelError."""
-        text = json.dumps(self.to_dict(), allow_nan=False)
+        """Write the cell as versioned JSON, atomically; a failed write raises ModelError.
+        Robot files are named relative to the cell file's folder."""
+        folder = Path(os.path.abspath(path)).parent
+        text = json.dumps(self.to_dict(base_dir=folder), allow_nan=False)
         atomic_write_text(path, text, error=ModelError)
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> Workcell:
+    def load(cls, path: str | os.PathLike, *, root: str | os.PathLike | None = None) -> Workcell:
         """Read a cell saved by :meth:`save`; a damaged file raises ModelError naming the
-        place (never quoting a file that is not a cell file)."""
+        place (never quoting a file that is not a cell file); so do a robot file that is
+        missing or changed. ``root``: robot files must lie inside this folder."""
         data = load_json(path, what="cell file", error=ModelError)
-        return cls.from_dict(data, source=f"cell file '{path}'")
+        folder = Path(os.path.abspath(path)).parent
+        return cls.from_dict(data, source=f"cell file '{path}'", base_dir=folder, root=root)
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Workcell) and self.to_dict() == other.to_dict()

@@ -53,8 +53,11 @@ from workcell.spatial import pose_from_pos_quat
 __all__ = ["from_mjcf"]
 
 _T = mujoco.mjtGeom
-_HINGE, _SLIDE, _BALL = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE),
-                         int(mujoco.mjtJoint.mjJNT_BALL))  # fmt: skip
+_HINGE, _SLIDE, _BALL = (
+    int(mujoco.mjtJoint.mjJNT_HINGE),
+    int(mujoco.mjtJoint.mjJNT_SLIDE),
+    int(mujoco.mjtJoint.mjJNT_BALL),
+)
 _FILE_ATTRS = frozenset(
     {"file", "meshdir", "texturedir", "assetdir"}
     | {f"file{s}" for s in ("right", "left", "up", "down", "front", "back")}
@@ -188,8 +191,15 @@ def _link(m: mujoco.MjModel, b: int, names: list[str], geometry: bool) -> TreeLi
         return link
     ref = float(m.qpos0[m.jnt_qposadr[j]])
     try:
-        joint = Joint(jname, np.eye(4), m.jnt_axis[j].copy(), kind, limits=(lo, hi),
-                      axis_point=m.jnt_pos[j].copy(), **joint_speeds(kind, None))  # fmt: skip
+        joint = Joint(
+            jname,
+            np.eye(4),
+            m.jnt_axis[j].copy(),
+            kind,
+            limits=(lo, hi),
+            axis_point=m.jnt_pos[j].copy(),
+            **joint_speeds(kind, None),
+        )
         # the body's pose is the pose at qpos0 = ref: at q = 0 it is turned back by ref
         link.joint = joint
         link.origin = origin @ joint.motion(-ref)
@@ -234,13 +244,16 @@ def from_mjcf(
     if tool_site is not None:
         known = [m.site(i).name for i in range(m.nsite)]
         if tool_site not in known:
-            raise ModelError(f"{what}: tool_site '{tool_site}' is not a site; sites: "
-                             f"{', '.join(n for n in known if n) or 'none'}")  # fmt: skip
+            raise ModelError(
+                f"{what}: tool_site '{tool_site}' is not a site; sites: "
+                f"{', '.join(n for n in known if n) or 'none'}"
+            )
         s = m.site(tool_site).id
         on = names[m.site_bodyid[s]]
         if tip is not None and tip != on:
-            raise ModelError(f"{what}: tool_site '{tool_site}' is on body '{on}', not on "
-                             f"tip_body '{tip}'")  # fmt: skip
+            raise ModelError(
+                f"{what}: tool_site '{tool_site}' is on body '{on}', not on tip_body '{tip}'"
+            )
         tip, tool = on, pose_from_pos_quat(m.site_pos[s], m.site_quat[s])
     if base_body is None:
         jointed = np.flatnonzero(m.body_jntnum > 0)
@@ -252,11 +265,20 @@ def from_mjcf(
     poses = {}
     for k in range(m.nkey):
         qpos = m.key_qpos[k]
-        values = {_name(m, "joint", j): float(qpos[m.jnt_qposadr[j]]) for j in range(m.njnt)
-                  if int(m.jnt_type[j]) in (_HINGE, _SLIDE)}  # fmt: skip
+        values = {
+            _name(m, "joint", j): float(qpos[m.jnt_qposadr[j]])
+            for j in range(m.njnt)
+            if int(m.jnt_type[j]) in (_HINGE, _SLIDE)
+        }
         poses[m.key(k).name or f"key{k}"] = values
-    options = {"base_body": base_body, "tip_body": tip_body, "tool_site": tool_site,
-               "name": name, "gripper": gripper, "geometry": geometry}  # fmt: skip
+    options = {
+        "base_body": base_body,
+        "tip_body": tip_body,
+        "tool_site": tool_site,
+        "name": name,
+        "gripper": gripper,
+        "geometry": geometry,
+    }
     model_name = bytes(m.names[: m.names.index(b"\0")]).decode(errors="replace")
     return build_robot(
         tree,

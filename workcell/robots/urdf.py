@@ -79,8 +79,14 @@ _UNSUPPORTED = ("planar", "floating")
 class _Doc:
     """One URDF document: elements' lines, materials, and how its files are found."""
 
-    def __init__(self, path: Path, lines: dict[ET.Element, int], packages: Mapping[str, Path],
-                 search: Sequence[Path], root: Path | None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        path: Path,
+        lines: dict[ET.Element, int],
+        packages: Mapping[str, Path],
+        search: Sequence[Path],
+        root: Path | None,
+    ) -> None:
         self.path, self.lines, self.packages, self.search = path, lines, packages, search
         self.root = None if root is None else Path(os.path.realpath(root))
         self.materials: dict[str, tuple[float, ...]] = {}
@@ -94,8 +100,9 @@ class _Doc:
     def fail(self, where: str, msg: str) -> ModelError:
         return ModelError(f"{self.what}: {where}: {msg}")
 
-    def floats(self, el: ET.Element | None, attr: str, n: int, default: tuple[float, ...],
-               where: str) -> tuple[float, ...]:  # fmt: skip
+    def floats(
+        self, el: ET.Element | None, attr: str, n: int, default: tuple[float, ...], where: str
+    ) -> tuple[float, ...]:
         text = None if el is None else el.get(attr)
         if text is None:
             return default
@@ -168,8 +175,12 @@ def _geometry(doc: _Doc, el: ET.Element, where: str) -> list[tuple[trimesh.Trime
         if found is None:
             return []
         return load_mesh(found, scale=scale, what=f"{doc.what}: {where}")  # type: ignore[arg-type]
-    sizes = {"box": ("size", 3), "cylinder": ("radius", 1), "sphere": ("radius", 1),
-             "capsule": ("radius", 1)}  # fmt: skip
+    sizes = {
+        "box": ("size", 3),
+        "cylinder": ("radius", 1),
+        "sphere": ("radius", 1),
+        "capsule": ("radius", 1),
+    }
     if shape.tag not in sizes:
         raise doc.fail(where, f"unknown geometry <{shape.tag}>; known: mesh, {', '.join(sizes)}")
     attr, n = sizes[shape.tag]
@@ -239,8 +250,11 @@ def _joint(doc: _Doc, el: ET.Element, links: Mapping[str, ET.Element]) -> tuple[
         )
         return ends[0], ends[1], tl
     if kind not in _KINDS:
-        raise doc.fail(where, f"unknown joint type {kind!r}; URDF types: revolute, continuous, "
-                              "prismatic, fixed, floating, planar")  # fmt: skip
+        raise doc.fail(
+            where,
+            f"unknown joint type {kind!r}; URDF types: revolute, continuous, "
+            "prismatic, fixed, floating, planar",
+        )
     if el.find("mimic") is not None:
         tl.unsupported = "a mimic joint cannot be in a robot's chain"
     axis = doc.floats(el.find("axis"), "xyz", 3, (1.0, 0.0, 0.0), where)
@@ -255,8 +269,9 @@ def _joint(doc: _Doc, el: ET.Element, links: Mapping[str, ET.Element]) -> tuple[
             raise doc.fail(where, f"limit lower {lo} must be below upper {hi}")
     (speed,) = doc.floats(lim, "velocity", 1, (0.0,), where)
     try:
-        tl.joint = Joint(name, origin, axis, _KINDS[kind], limits=(lo, hi),
-                         **joint_speeds(_KINDS[kind], speed))  # fmt: skip
+        tl.joint = Joint(
+            name, origin, axis, _KINDS[kind], limits=(lo, hi), **joint_speeds(_KINDS[kind], speed)
+        )
     except WorkcellError as exc:
         raise doc.fail(where, str(exc)) from exc
     return ends[0], ends[1], tl
@@ -283,8 +298,11 @@ def _tree(doc: _Doc, robot: ET.Element) -> dict[str, TreeLink]:
     for el in robot.findall("joint"):
         _, child, tl = _joint(doc, el, elements)
         if child in by_child:
-            raise doc.fail(tl.what, f"link '{child}' is already the child of joint "
-                                    f"'{by_child[child]}'; a link has one parent")  # fmt: skip
+            raise doc.fail(
+                tl.what,
+                f"link '{child}' is already the child of joint "
+                f"'{by_child[child]}'; a link has one parent",
+            )
         by_child[child] = el.get("name", "")
         tree[child] = tl
     for start in tree:  # every walk up must end at a root
@@ -292,8 +310,10 @@ def _tree(doc: _Doc, robot: ET.Element) -> dict[str, TreeLink]:
         while n is not None:
             if n in seen:
                 loop = seen[seen.index(n) :]
-                raise ModelError(f"{doc.what}: the joints {', '.join(by_child[x] for x in loop)} "
-                                 f"form a loop (links {' -> '.join(loop)})")  # fmt: skip
+                raise ModelError(
+                    f"{doc.what}: the joints {', '.join(by_child[x] for x in loop)} "
+                    f"form a loop (links {' -> '.join(loop)})"
+                )
             seen.append(n)
             n = tree[n].parent
     for n, el in elements.items():
@@ -342,8 +362,10 @@ def from_urdf(
     given_base = base_link
     if base_link is None:
         if len(roots) != 1:
-            raise ModelError(f"{doc.what}: links {', '.join(roots)} have no parent; "
-                             "name the base with base_link=")  # fmt: skip
+            raise ModelError(
+                f"{doc.what}: links {', '.join(roots)} have no parent; "
+                "name the base with base_link="
+            )
         base_link = roots[0]
     for arg, value in (("base_link", base_link), ("tip_link", tip_link)):
         if value is not None and value not in tree:
@@ -352,10 +374,15 @@ def from_urdf(
     if tip is None:
         tip = "tool0" if "tool0" in tree and _below(tree, "tool0", base_link) else None
     options = {
-        "packages": {k: str(v) for k, v in pk.items()}, "search": [str(s) for s in sr],
-        "base_link": given_base, "tip_link": tip_link,
-        "name": name, "gripper": gripper, "geometry": geometry, "concavity": concavity,
-    }  # fmt: skip
+        "packages": {k: str(v) for k, v in pk.items()},
+        "search": [str(s) for s in sr],
+        "base_link": given_base,
+        "tip_link": tip_link,
+        "name": name,
+        "gripper": gripper,
+        "geometry": geometry,
+        "concavity": concavity,
+    }
     robot_name = name or top.get("name") or p.stem
     return build_robot(
         tree,

@@ -1,0 +1,232 @@
+"""Every kind of robot in a saved cell: library names, robots built from DH rows or joints
+(saved inline), robots read from URDF and MJCF files (saved as their file, its sha256
+and the import options), checked by the FK of the rebuilt robots (bit for bit), MuJoCo's
+compile of the reloaded cell, and a pick-and-place program through ``workcell run``."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from robot_files import RTB, RTB_FILES, arm_mjcf, arm_urdf, random_q, write, write_meshes
+
+from workcell import Workcell, solids, spatial
+from workcell.cell import compile_cell
+from workcell.cli import main
+from workcell.errors import ModelError
+from workcell.robots import (
+    Joint,
+    LinkGeometry,
+    Robot,
+    attach_gripper,
+    chain_geometry,
+    from_mjcf,
+    from_urdf,
+    parallel_gripper,
+)
+from workcell.robots.chain import joints_from_table
+
+
+def quiet_urdf(path, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return from_urdf(path, **kw)
+
+
+def reload(cell: Workcell, path: Path, **kw) -> Workcell:
+    cell.save(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return Workcell.load(path, **kw)
+
+
+def same_robot(a: Robot, b: Robot, n: int = 50) -> None:
+    assert [j.name for j in a.joints] == [j.name for j in b.joints]
+    Q = random_q(a, n, seed=7)
+    assert np.array_equal(a.fk_batch(Q), b.fk_batch(Q))  # bit for bit
+    np.testing.assert_array_equal(a.lower, b.lower)
+    np.testing.assert_array_equal(a.max_jerks, b.max_jerks)
+
+
+def dh_robot() -> Robot:
+    """A 4-axis arm from a modified-DH table, with generated link solids and poses."""
+    rows = [(0, 0.3, 0, 0), (0.05, 0, -90, -90), (0.35, 0, 0, 0), (0.05, 0.3, -90, 0)]
+    joints = joints_from_table(
+        rows, [(-170, 170), (-120, 120), (-150, 150), (-180, 180)],
+        max_speed_deg=[150, 150, 180, 300], convention="modified",
+    )  # fmt: skip
+    robot = Robot(
+        "dh4", joints, tool=spatial.translation(0, 0, 0.08), poses={"home": [0, 0.2, 0.3, 0]}
+    )
+    return chain_geometry(robot)
+
+
+def test_library_dh_and_joint_robots_round_trip(tmp_path):
+    cell = Workcell("kinds")
+    custom = Robot(
+        "custom",
+        (Joint("a", spatial.translation(0, 0, 0.2), (0, 0, 1)),
+         Joint("b", spatial.rot_x(0.3) @ spatial.translation(0.1, 0, 0.1), (0, 1, 0),
+               limits=(-1, 2), max_speed=1.5, axis_point=(0.01, 0, 0)),
+         Joint("c", spatial.translation(0.2, 0, 0), (1, 0, 0), "prismatic", limits=(0, 0.3))),
+    )  # fmt: skip
+    cell.add_robot("lib", "ur5e", gripper={"max_opening": 0.06})
+    cell.add_robot("dh", dh_robot(), gripper=True, base=spatial.translation(1, 0, 0))
+    cell.add_robot("joints", custom, base=spatial.translation(0, 1, 0), q=[0.1, 0.2, 0.05])
+    data = json.loads(json.dumps(cell.to_dict()))
+    kinds = {
+        r["name"]: next(k for k in ("builtin", "chain", "file") if k in r) for r in data["robots"]
+    }
+    assert kinds == {"lib": "builtin", "dh": "chain", "joints": "chain"}
+    dh = next(r for r in data["robots"] if r["name"] == "dh")
+    assert dh["chain"]["joints"][1]["dh"]["convention"] == "modified"  # the DH rows are kept
+    assert dh["gripper"] == {}
+    back = reload(cell, tmp_path / "kinds.json")
+    assert back == cell
+    for name in ("dh", "joints"):
+        same_robot(cell.robots[name].robot, back.robots[name].robot)
+    assert back.robots["dh"].robot.gripper is not None
+    assert back.robots["dh"].robot.pose("home").tolist() == [0, 0.2, 0.3, 0]
+    a, b = compile_cell(cell).model, compile_cell(back).model
+    assert a.nbody == b.nbody
+    np.testing.assert_array_equal(a.body_pos, b.body_pos)
+    np.testing.assert_allclose(a.body_mass, b.body_mass, rtol=1e-12)
+
+
+def test_urdf_robots_are_saved_as_their_file(tmp_path):
+    folder = tmp_path / "robots" / "arm"
+    write_meshes(folder)
+    urdf = write(folder, "arm.urdf", arm_urdf())
+    robot = quiet_urdf(urdf, base_link="base_link", tip_link="link5", name="my_arm")
+    cell = Workcell("urdf_cell")
+    cell.add_robot("r", robot, gripper=True, q=[0.1, 0.2, 0.05, 0.3, 0.4])
+    cell_file = tmp_path / "cells" / "c.json"
+    cell_file.parent.mkdir()
+    back = reload(cell, cell_file)
+    entry = json.loads(cell_file.read_text())["robots"][0]
+    assert entry["file"]["path"] == "../robots/arm/arm.urdf"  # relative to the cell file
+    assert entry["file"]["options"]["tip_link"] == "link5"
+    assert entry["file"]["options"]["name"] == "my_arm"
+    assert len(entry["file"]["sha256"]) == 64
+    assert entry["gripper"] == {}
+    same_robot(robot, back.robots["r"].bare)
+    np.testing.assert_array_equal(back.robots["r"].robot.tool, cell.robots["r"].robot.tool)
+    # cell and robot folders moved together: still found
+    shutil.move(tmp_path / "robots", tmp_path / "moved" / "robots")
+    shutil.move(tmp_path / "cells", tmp_path / "moved" / "cells")
+    moved = tmp_path / "moved" / "cells" / "c.json"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert Workcell.load(moved).robots["r"].robot.dof == 5
+    # a changed robot file, then a missing one
+    moved_urdf = tmp_path / "moved" / "robots" / "arm" / "arm.urdf"
+    moved_urdf.write_text(moved_urdf.read_text().replace('velocity="2"', 'velocity="2.5"'))
+    with pytest.raises(ModelError, match=r"robots\[0\] \('r'\).*changed since the cell was saved"):
+        Workcell.load(moved)
+    moved_urdf.unlink()
+    with pytest.raises(ModelError, match=r"robots\[0\] \('r'\).*cannot read robot file"):
+        Workcell.load(moved)
+
+
+def test_mjcf_robots_with_their_own_gripper_round_trip(tmp_path):
+    write_meshes(tmp_path)
+    f = write(tmp_path, "arm.xml", arm_mjcf())
+    robot = from_mjcf(f, tool_site="flange")
+    cell = Workcell("mjcf_cell")
+    cell.add_robot("m", robot)
+    back = reload(cell, tmp_path / "m.json")
+    r = back.robots["m"].robot
+    same_robot(robot, r)
+    assert r.gripper is not None
+    assert r.gripper.finger_travel == robot.gripper.finger_travel
+    np.testing.assert_array_equal(back.robots["m"].q, robot.pose("home"))  # its home keyframe
+
+
+def test_robots_that_cannot_be_saved_say_why(tmp_path):
+    box = trimesh.creation.box(extents=(0.1, 0.1, 0.1))
+    meshy = Robot("meshy", (Joint("a"),), geometry=(LinkGeometry(1, None, np.eye(4), mesh=box),))
+    cell = Workcell("bad")
+    cell.add_robot("m", meshy)
+    with pytest.raises(ModelError, match=r"robot 'm' cannot be saved.*from_urdf or from_mjcf"):
+        cell.save(tmp_path / "bad.json")
+    cell = Workcell("bad2")
+    cell.add_robot("g", attach_gripper(dh_robot(), parallel_gripper()))
+    with pytest.raises(ModelError, match=r"attached outside the cell.*gripper=\.\.\."):
+        cell.to_dict()
+
+
+def test_a_changed_file_robot_is_no_longer_that_file(tmp_path):
+    write_meshes(tmp_path)
+    robot = quiet_urdf(write(tmp_path, "arm.urdf", arm_urdf()))
+    assert robot.with_(name="x", nominal_speed=0.5).file == robot.file  # the same robot
+    for change in ({"base": spatial.translation(0, 0, 1)}, {"tool": np.eye(4)}, {"geometry": ()}):
+        assert robot.with_(**change).file is None
+
+
+def test_root_confines_robot_files_of_a_loaded_cell(tmp_path):
+    write_meshes(tmp_path / "outside")
+    urdf = write(tmp_path / "outside", "arm.urdf", arm_urdf())
+    cell = Workcell("c")
+    cell.add_robot("r", quiet_urdf(urdf))
+    root = tmp_path / "root"
+    root.mkdir()
+    cell.save(root / "c.json")
+    with pytest.raises(ModelError, match=r"outside the server's root folder|refused"):
+        Workcell.load(root / "c.json", root=root)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert Workcell.load(root / "c.json").robots["r"].robot.dof == 5
+
+
+# ---------------------------------------------------------------- KUKA KR 16 from rtb-data
+PROGRAM = """\
+cell load {cell}
+simulate path dt 0.01
+move end_effector arm at cube offset 0 0 0.1 down config ru
+move straight arm at cube down
+close gripper arm
+move straight arm at cube offset 0 0 0.1 down
+move end_effector arm on stage offset 0 0 0.12 down config ru
+move straight arm on stage offset 0 0 0.02 down
+open gripper arm
+move straight arm on stage offset 0 0 0.12 down
+positions
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(RTB is None, reason="rtb-data (a test dependency) is missing")
+def test_an_imported_kr16_runs_pick_and_place_from_a_saved_cell(tmp_path, capsys):
+    robot = quiet_urdf(RTB / RTB_FILES["kr16"])
+    assert robot.ik_family == "opw"
+    d, h = 0.55 * 1.611, 0.5
+    cell = Workcell("pick_kr16_urdf")
+    m = cell.model
+    solids.box(m, "table_block", size=(0.6, 0.9, h))
+    solids.box(m, "stage_block", size=(0.12, 0.12, 0.1))
+    solids.cube(m, "cube_block", size=0.04)
+    cell.add_static("table", "table_block", spatial.translation(d - 0.3, -0.45, 0))
+    cell.add_static("stage", "stage_block", spatial.translation(d - 0.06, 0.2, h))
+    cell.add_movable("cube", "cube_block", spatial.translation(d - 0.02, -0.22, h), density=2700.0)
+    cell.add_robot("arm", robot, gripper=True, q=np.radians([0, -90, 90, 0, 45, 0]))
+    cell.save(tmp_path / "cell.json")
+    entry = json.loads((tmp_path / "cell.json").read_text())["robots"][0]
+    assert entry["file"]["format"] == "urdf"
+    script = tmp_path / "pick.wcl"
+    script.write_text(PROGRAM.format(cell="cell.json"))
+    assert main(["run", str(script), "--summary"]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads(out[out.index("{") :])
+    cube = np.array(summary["objects"]["cube"])
+    np.testing.assert_allclose(cube, [d, 0.26, h + 0.1 + 0.02], atol=2e-3)  # on the stage
+    kinds = [e["kind"] for e in summary["events"]]
+    assert "grasp" in kinds
+    assert "release" in kinds
+    assert summary["collisions"] == 0
+    assert math.isfinite(summary["sim_time_s"])
