@@ -122,15 +122,17 @@ def test_damaged_files_name_the_place(tmp_path):
         Workcell.load(p)
 
 
-def test_custom_robot_works_in_memory_but_is_refused_on_save(tmp_path):
+def test_custom_robot_is_saved_inline(tmp_path):
     from workcell.robots import puma560
 
     cell = two_puma_cell()
     cell.add_robot("custom", puma560(geometry=False).with_(name="mine"), gripper=True)
     assert cell.robots["custom"].robot.gripper is not None
-    with pytest.raises(ModelError, match="custom"):
-        cell.save(tmp_path / "c.json")
-    assert not (tmp_path / "c.json").exists()
+    cell.save(tmp_path / "c.json")  # its DH chain inline (workcell.cell.robot_json)
+    back = Workcell.load(tmp_path / "c.json")
+    assert back == cell
+    q = np.radians([10, 20, -30, 40, 50, 60])
+    assert np.array_equal(back.robots["custom"].robot.fk(q), cell.robots["custom"].robot.fk(q))
 
 
 def test_errors_are_workcell_errors():

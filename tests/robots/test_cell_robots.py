@@ -230,3 +230,69 @@ def test_an_imported_kr16_runs_pick_and_place_from_a_saved_cell(tmp_path, capsys
     assert "release" in kinds
     assert summary["collisions"] == 0
     assert math.isfinite(summary["sim_time_s"])
+
+
+# ---------------------------------------------------------------- the language and the server
+def test_the_command_language_imports_robot_files(tmp_path):
+    from workcell.errors import ProgramError
+    from workcell.program import Session
+    from workcell.program.interpreter import Interpreter
+
+    write_meshes(tmp_path)
+    write(tmp_path, "arm.urdf", arm_urdf())
+    write(tmp_path, "arm.xml", arm_mjcf())
+    session = Session(base_dir=tmp_path)
+    run = Interpreter(session, out=lambda _: None).run_line
+    run("cell new c")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run("add robot r1 urdf arm.urdf tip_link link5 gripper translate 1 0 0")
+        run("add robot r2 mjcf arm.xml tool_site flange q 0 10 0.1 20 30")
+    r1, r2 = session.cell.robots["r1"], session.cell.robots["r2"]
+    np.testing.assert_array_equal(r1.base, spatial.translation(1, 0, 0))
+    same_robot(r1.bare, quiet_urdf(tmp_path / "arm.urdf", tip_link="link5"))
+    assert r1.robot.gripper is not None
+    same_robot(r2.robot, from_mjcf(tmp_path / "arm.xml", tool_site="flange"))
+    np.testing.assert_allclose(r2.q, [0, np.radians(10), 0.1, np.radians(20), np.radians(30)])
+    for line, pattern in (
+        ("add robot r3 ur5e urdf arm.urdf", "give one of a library MODEL"),
+        ("add robot r3 urdf arm.urdf tool_site x", "tool_site do.*not apply to a urdf file"),
+        ("add robot r3 base_link x", "only for a robot read from urdf or mjcf"),
+        ("add robot r3 mjcf none.xml", "cannot read MJCF file"),
+    ):
+        with pytest.raises((ProgramError, ModelError), match=pattern):
+            run(line)
+    assert set(session.cell.robots) == {"r1", "r2"}  # a failed command changes nothing
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run("cell save c.json")
+        run("cell load c.json")
+    same_robot(session.cell.robots["r2"].robot, r2.robot)
+
+
+@pytest.mark.slow
+@pytest.mark.filterwarnings("ignore:.*are left out")
+def test_the_server_imports_robot_files_inside_its_root(tmp_path):
+    from workcell.client import Client
+    from workcell.errors import ProgramError
+    from workcell.program.server import Server
+
+    write_meshes(tmp_path)
+    write(tmp_path, "arm.urdf", arm_urdf())
+    robot = quiet_urdf(tmp_path / "arm.urdf")
+    srv = Server(port=0, root=tmp_path)
+    srv.serve_in_thread()
+    try:
+        with Client(port=srv.port, timeout=60) as c:
+            c.new_cell(name="c")
+            c.import_robot(name="r", format="urdf", path="arm.urdf", gripper=True)
+            with pytest.raises(ProgramError, match="refused"):
+                c.import_robot(name="s", format="urdf", path="arm.urdf", search=["/etc"])
+            c.simulate()
+            q = np.array([0.3, -0.2, 0.1, 0.5, -0.4])
+            c.move_joints_absolute("r", q)
+            tool = attach_gripper(robot, parallel_gripper()).fk(q)
+            np.testing.assert_allclose(c.tool_pose("r"), tool, atol=1e-9)
+            assert c.cell.robots["r"].robot.dof == 5  # the client rebuilds the cell's robot
+    finally:
+        srv.stop()

@@ -32,6 +32,7 @@ __all__ = [
     "AddStatic",
     "CellData",
     "ExampleCell",
+    "ImportRobot",
     "LoadCell",
     "NewCell",
     "RemoveFromCell",
@@ -83,7 +84,7 @@ class LoadCell(Command, wire="load_cell"):
     def execute(self, session: Session) -> str:
         from workcell.cell.workcell import Workcell
 
-        cell = Workcell.load(session.path(self.path))
+        cell = Workcell.load(session.path(self.path), root=session.root)
         session.set_cell(cell)
         return cell.name
 
@@ -140,6 +141,72 @@ class AddRobot(Command, wire="add_robot"):
             gripper=True if self.gripper else None,
             base=_T(self.base),
             q=None if self.q is None else np.array(self.q),
+        )
+        return self.name
+
+
+_URDF_ONLY = ("base_link", "tip_link", "search")
+_MJCF_ONLY = ("base_body", "tip_body", "tool_site")
+
+
+@dataclass(frozen=True)
+class ImportRobot(Command, wire="import_robot"):
+    """Add a robot read from a robot file: ``format`` urdf or mjcf, ``path`` (inside the
+    server's root folder, as are its meshes), the chain's ends (URDF ``base_link`` and
+    ``tip_link``; MJCF ``base_body``, ``tip_body``, ``tool_site``; defaults: see
+    ``from_urdf``/``from_mjcf``), ``search`` folders for a URDF's ``package://`` meshes; at
+    world ``base`` (4x4) with initial joint values ``q`` (rad/m; with ``q_degrees``, deg
+    for revolute joints and m for prismatic ones, as the command language writes them),
+    optionally with the parallel gripper (a robot file's own gripper is kept anyway)."""
+
+    name: str = arg(a.name)
+    format: str = arg(a.choice("urdf", "mjcf"))
+    path: str = arg(a.file_name)
+    base_link: str | None = arg(a.optional(a.name), None)
+    tip_link: str | None = arg(a.optional(a.name), None)
+    base_body: str | None = arg(a.optional(a.name), None)
+    tip_body: str | None = arg(a.optional(a.name), None)
+    tool_site: str | None = arg(a.optional(a.name), None)
+    search: tuple[str, ...] = arg(a.list_of(a.file_name), ())
+    gripper: bool = arg(a.boolean, False)
+    base: tuple[tuple[float, ...], ...] | None = arg(_opt_matrix, None)
+    q: tuple[float, ...] | None = arg(a.optional(a.vector), None)
+    q_degrees: bool = arg(a.boolean, False)
+
+    def execute(self, session: Session) -> str:
+        from workcell.robots import from_mjcf, from_urdf
+
+        path = session.path(self.path)  # a server's root folder first
+        search = [session.path(s) for s in self.search]
+        cell = _editable(session)
+        other = _MJCF_ONLY if self.format == "urdf" else _URDF_ONLY
+        given = [k for k in other if getattr(self, k)]
+        if given:
+            raise ProgramError(
+                f"import_robot: {', '.join(given)} do(es) not apply to a {self.format} file; "
+                f"give {', '.join(_URDF_ONLY if self.format == 'urdf' else _MJCF_ONLY)}"
+            )
+        if self.format == "urdf":
+            robot = from_urdf(
+                path,
+                search=search,
+                base_link=self.base_link,
+                tip_link=self.tip_link,
+                root=session.root,
+            )
+        else:
+            robot = from_mjcf(
+                path,
+                base_body=self.base_body,
+                tip_body=self.tip_body,
+                tool_site=self.tool_site,
+                root=session.root,
+            )
+        q = None if self.q is None else np.array(self.q)
+        if q is not None and self.q_degrees and len(q) == robot.dof:
+            q = np.where(robot.revolute, np.radians(q), q)
+        cell.add_robot(
+            self.name, robot, gripper=True if self.gripper else None, base=_T(self.base), q=q
         )
         return self.name
 

@@ -15,6 +15,7 @@ orientation, the tool keeps its current one.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from workcell import spatial
@@ -223,6 +224,39 @@ _CELL = Keys(
     }
 )
 
+_FILE_ROBOT_OPTIONS = ("base_link", "tip_link", "base_body", "tip_body", "tool_site")
+
+
+def _add_robot(v: dict[str, Any]) -> cellc.AddRobot | cellc.ImportRobot:
+    files = [k for k in ("urdf", "mjcf") if k in v]
+    extra = [k for k in (*_FILE_ROBOT_OPTIONS, "search") if k in v]
+    if len(files) > 1 or (files and "model" in v):
+        raise ProgramError("give one of a library MODEL, urdf FILE or mjcf FILE")
+    if not files:
+        if extra:
+            raise ProgramError(f"{', '.join(extra)}: only for a robot read from urdf or mjcf FILE")
+        return cellc.AddRobot(
+            v["name"],
+            v.get("model", "puma260"),
+            v.get("gripper", False),
+            transform_of(v),
+            v.get("q"),
+        )
+    kind = files[0]
+    return cellc.ImportRobot(
+        v["name"],
+        kind,
+        v[kind],
+        **{k: v[k] for k in _FILE_ROBOT_OPTIONS if k in v},
+        search=(v["search"],) if "search" in v else (),
+        gripper=v.get("gripper", False),
+        base=transform_of(v),
+        # parsed as angles (rad); the robot file says which joints are prismatic (m)
+        q=tuple(math.degrees(x) for x in v["q"]) if "q" in v else None,
+        q_degrees=True,
+    )
+
+
 _ADD = Keys(
     {
         "robot": Seq(
@@ -230,22 +264,24 @@ _ADD = Keys(
             Options(
                 {
                     **{name: Set("model", name) for name in library()},
+                    "urdf": Text("urdf", "URDF file"),
+                    "mjcf": Text("mjcf", "MJCF file"),
+                    **{k: Name(k, what=k.replace("_", " ")) for k in _FILE_ROBOT_OPTIONS},
+                    "search": Text("search", "folder"),
                     "gripper": Set("gripper", True),
                     "q": Vector("q", None, "angle", what="initial joint values (deg)"),
                     **TRANSFORM_OPTIONS,
                 }
             ),
             _leaf(
-                lambda v: cellc.AddRobot(
-                    v["name"],
-                    v.get("model", "puma260"),
-                    v.get("gripper", False),
-                    transform_of(v),
-                    v.get("q"),
-                ),
-                f"add robot NAME [MODEL] [gripper] [q J1 .. Jn] {TRANSFORM_SYNTAX}",
+                _add_robot,
+                "add robot NAME [MODEL | urdf FILE | mjcf FILE] [base_link L] [tip_link L] "
+                "[base_body B] [tip_body B] [tool_site S] [search DIR] [gripper] [q J1 .. Jn] "
+                f"{TRANSFORM_SYNTAX}",
                 "place a library robot (MODEL: puma260 (default), ur5e, kuka_kr6_r700, ... "
-                "see 'workcell robots'; base pose by the transform; q in deg)",
+                "see 'workcell robots') or one read from a URDF or MJCF file (the chain from "
+                "base_link/base_body to tip_link/tip_body/tool_site; search: a folder for "
+                "package:// meshes); base pose by the transform; q in deg",
                 "add robot puma puma260 q 0 0 -90 0 90 0",
             ),
         ),
