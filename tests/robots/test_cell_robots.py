@@ -296,3 +296,56 @@ def test_the_server_imports_robot_files_inside_its_root(tmp_path):
             assert c.cell.robots["r"].robot.dof == 5  # the client rebuilds the cell's robot
     finally:
         srv.stop()
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(RTB is None, reason="rtb-data (a test dependency) is missing")
+def test_an_imported_robot_runs_in_physics_records_and_renders(tmp_path):
+    """The imported KR 16's pick and place with mj_step (the compiled servos, its DAE link
+    masses), a rerun recording and a rendered frame; the MJCF arm's own gripper too."""
+    from workcell.record import record, render_frame
+    from workcell.sim import Simulator
+    from workcell.sim.grasp import tool_down
+    from workcell.sim.physics import run_physics
+
+    cell = Workcell("kr16_physics")
+    solids.box(cell.model, "table_block", size=(0.6, 0.9, 0.5))
+    solids.cube(cell.model, "cube_block", size=0.04)
+    cell.add_static("table", "table_block", spatial.translation(0.6, -0.45, 0))
+    cell.add_movable("cube", "cube_block", spatial.translation(0.88, -0.22, 0.5), density=2700.0)
+    cell.add_robot("arm", quiet_urdf(RTB / RTB_FILES["kr16"]), gripper=True,
+                   q=np.radians([0, -90, 90, 0, 45, 0]))  # fmt: skip
+    cell.add_camera("cam", (2.5, -2.5, 2.0), (0.8, 0.0, 0.5))
+    sim = Simulator(cell, mode="path", dt=0.01)
+    cube = cell.movable_parts["cube"].pose[:3, 3] + 0.02
+    up = spatial.translation(0, 0, 0.1)
+    sim.move_end_effector("arm", up @ tool_down(cube), config="ru")
+    sim.move_straight_line("arm", tool_down(cube))
+    assert sim.close_gripper("arm") == "cube"
+    sim.move_straight_line("arm", up @ tool_down(cube))
+    there = cube + np.array([0.0, 0.2, 0.0])  # slid 0.2 m along the table
+    sim.move_straight_line("arm", tool_down(there))
+    sim.open_gripper("arm")
+    sim.move_straight_line("arm", up @ tool_down(there))
+    res = run_physics(sim)
+    assert res.tracking["arm"].tool_max < 5e-3  # m: the servos follow the plan
+    assert res.parts["cube"].distance < 1e-3  # the cube lands where it did kinematically
+    assert res.parts["cube"].resting
+    record(sim, tmp_path / "run.rrd")
+    assert (tmp_path / "run.rrd").stat().st_size > 10_000
+    img = render_frame(sim, len(sim.timeline) - 1, camera="cam")
+    assert img.shape == (480, 640, 3)
+    assert (img.reshape(-1, 3).std(axis=0) > 10).all()  # a picture, not a blank
+    # an MJCF arm's own gripper holds a part in physics too
+    write_meshes(tmp_path)
+    arm = from_mjcf(write(tmp_path, "arm.xml", arm_mjcf()), tool_site="flange")
+    cell = Workcell("mjcf_physics")
+    solids.box(cell.model, "cube", size=(0.02, 0.02, 0.02))
+    q = arm.pose("home")
+    cell.add_movable("cube", "cube", spatial.translation(*(arm.fk(q)[:3, 3] - 0.01)), density=500.0)
+    cell.add_robot("m", arm, q=q)
+    sim = Simulator(cell, mode="path", dt=0.01)
+    assert sim.close_gripper("m", max_distance=0.005, max_angle=np.radians(90)) == "cube"
+    sim.move_joints_absolute("m", q + 0.1)
+    res = run_physics(sim)
+    assert res.tracking["m"].tool_max < 5e-3
