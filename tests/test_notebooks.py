@@ -31,7 +31,7 @@ PICTURES = {
     "quickstart": 4,
     "build_your_own_cell": 2,
     "modeller": 1,
-    "kinematics": 2,
+    "kinematics": 3,
     "thesis_examples": 3,
     "study": 2,
 }
@@ -177,6 +177,11 @@ def check_kinematics(out: str) -> None:
     ur = re.findall(r"^ur5e ([lr][ud][nf])\s+True\s", out, re.M)
     assert sorted(ur) == sorted(a + b + c for a in "lr" for b in "ud" for c in "nf")
     assert _number(out, "largest |fk(q) - T| of the UR5e solutions:") < 1e-9
+    # a KUKA KR 16 read from its ROS-Industrial URDF (rtb-data): an OPW arm, 4 solutions
+    assert re.findall(r"^KR 16 from kr16_2\.urdf in .* 6 axes, family opw", out, re.M)
+    kr = re.findall(r"^kr16 ([lr][ud][nf])\s+True\s", out, re.M)
+    assert sorted(kr) == ["rdf", "rdn", "ruf", "run"]
+    assert _number(out, "largest |fk(q) - T| of the KR 16 solutions:") < 1e-9
 
 
 def check_thesis_examples(out: str) -> None:
