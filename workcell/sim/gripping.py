@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from workcell.checks import is_finite_number
 from workcell.errors import GraspError, ProgramError
+from workcell.sim.cycle import command_record
 from workcell.sim.grasp import PartBox, describe_failure, grasp_candidates
 from workcell.spatial import invert, pos_quat_from_pose
 
@@ -137,6 +138,7 @@ class GripperCommands:
                 "grasp",
                 f"grasp '{part}': axis {math.degrees(chosen.angle):.3g} deg, width "
                 f"{chosen.width * 1e3:.4g} mm, distance {chosen.distance * 1e3:.3g} mm",
+                command_record(name, "close_gripper", self.sim_time, 0.0),
             )
         return part
 
@@ -170,8 +172,11 @@ class GripperCommands:
                         hold.quat,
                     )
                 )
+            rec = command_record(name, "open_gripper", self.sim_time, 0.0)
             if hold is None:
-                self.timeline.add_event(self.sim_time, name, "open", "open_gripper: nothing held")
+                self.timeline.add_event(
+                    self.sim_time, name, "open", "open_gripper: nothing held", rec
+                )
             else:
                 others = self._holders[hold.part]
                 to = f", now carried by '{others[0]}'" if others else ""
@@ -179,7 +184,7 @@ class GripperCommands:
                     f"{round(v, 4) + 0.0:.4f}" for v in self.part_pose(hold.part)[:3, 3]
                 )
                 self.timeline.add_event(
-                    self.sim_time, name, "release", f"release '{hold.part}' at ({where}) m{to}"
+                    self.sim_time, name, "release", f"release '{hold.part}' at ({where}) m{to}", rec
                 )
         return None if hold is None else hold.part
 

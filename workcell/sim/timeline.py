@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import tempfile
 from collections.abc import Iterator
-from typing import IO, NamedTuple
+from typing import IO, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,13 +40,16 @@ class Event(NamedTuple):
     """Something that happened at simulated time ``t`` (s): ``robot`` (None: the whole
     cell), ``kind`` ("move", "wait", "grasp", "release", "collision", "error", ...), a
     human-readable ``detail``, and ``frame``: the last frame on the timeline when it was
-    recorded (the frame showing its result; several frames may share one time)."""
+    recorded (the frame showing its result; several frames may share one time); ``data``:
+    the command's cycle-time record, for the events that end a command (see
+    :mod:`workcell.sim.cycle`), else None."""
 
     t: float
     robot: str | None
     kind: str
     detail: str
     frame: int = -1
+    data: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, object]:
         """The DESIGN.md ``{t, robot, kind, detail}`` object, plus ``frame``."""
@@ -262,9 +265,16 @@ class Timeline:
         """Every event, in order."""
         return tuple(self._events)
 
-    def add_event(self, t: float, robot: str | None, kind: str, detail: str = "") -> Event:
-        """Record an event and return it."""
-        e = Event(float(t), robot, str(kind), str(detail), self._n - 1)
+    def add_event(
+        self,
+        t: float,
+        robot: str | None,
+        kind: str,
+        detail: str = "",
+        data: dict[str, Any] | None = None,
+    ) -> Event:
+        """Record an event (``data``: its command record) and return it."""
+        e = Event(float(t), robot, str(kind), str(detail), self._n - 1, data)
         self._events.append(e)
         return e
 
