@@ -28,7 +28,8 @@ from numpy.typing import ArrayLike, NDArray
 from workcell.cell.workcell import RobotPlacement
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, KinematicsError, ProgramError, UnreachableError
-from workcell.robots.ik_closed import puma_config, puma_ik_report
+from workcell.robots.ik_closed import CONFIGS, puma_config, puma_ik_batch, puma_ik_report
+from workcell.robots.robot import Robot
 from workcell.sim.cycle import command_record
 from workcell.sim.jerk import require_finite
 from workcell.sim.paths import CartesianPath, Line
@@ -122,7 +123,10 @@ def path_joints(
     prev = q0
     robot = placement.robot
     keep = puma_config(robot, q0)[:2] if robot.family == "puma" else None
-    for k in range(len(poses)):
+    start = 0
+    if keep is not None:  # the closed form for every sample at once, then one by one
+        start, prev = _puma_samples(robot, Tb, q0, keep, Q, max_jump)
+    for k in range(start, len(poses)):
         try:
             q = _solve_base(placement, Tb[k], prev, keep)
         except UnreachableError as exc:
@@ -138,6 +142,31 @@ def path_joints(
             )
         Q[k] = prev = q
     return Q
+
+
+def _puma_samples(
+    robot: Robot, Tb: Array, q0: Array, keep: str, Q: Array, max_jump: float
+) -> tuple[int, Array]:
+    """Fill Q with the Puma closed form's solutions of arm and elbow configuration
+    ``keep``, each the in-limit 2 pi-equivalent nearest the previous sample (as
+    :func:`_solve_base` picks them), vectorised over the poses; stops at the first sample
+    without one or with a joint jump over ``max_jump``. Returns (samples done, last q)."""
+    S, valid = puma_ik_batch(robot, Tb, q0)
+    slots = [i for i, c in enumerate(CONFIGS) if c.startswith(keep)]
+    prev = q0
+    for k in range(len(Tb)):
+        best, far = None, math.inf
+        for i in slots:
+            if not valid[k, i]:
+                continue
+            W, ok = robot.wrap_batch(S[k, i], prev)
+            d = float(np.abs(W - prev).max())
+            if ok.all() and d < far:
+                best, far = W, d
+        if best is None or far > max_jump:
+            return k, prev
+        Q[k] = prev = best
+    return len(Tb), prev
 
 
 def _where(fraction: float, pose: Array, what: str) -> str:

@@ -50,10 +50,13 @@ _IK_TOL = 1e-9
 
 def sample_params(path: CartesianPath, step: float) -> Array:
     """Path parameters of the IK samples: each piece cut into equal parts at most
-    ``step`` (m) and 2 deg of turn long (the start included)."""
+    ``step`` (m; a curved piece's own ``max_step`` if shorter) and 2 deg of turn long
+    (the start included), and at least 24 of them in all (toppra's grid)."""
     out = [np.zeros(1)]
+    step = min(step, path.span / (_MIN_GRID - 1)) if path.span > 0 else step
     for k, p in enumerate(path.pieces):
-        n = max(1, math.ceil(p.span / step - 1e-9), math.ceil(p.angle / _ANGLE_STEP - 1e-9))
+        h = min(step, p.max_step)
+        n = max(1, math.ceil(p.span / h - 1e-9), math.ceil(p.angle / _ANGLE_STEP - 1e-9))
         out.append(path.starts[k] + p.span * np.arange(1, n + 1) / n)
     return np.concatenate(out)
 
@@ -269,6 +272,65 @@ def _tool_constraint(speed: Array, acceleration: Array) -> Any:
     return ToolConstraint()
 
 
+class JointPath:
+    """q(s) and the tool length l(s) (last column) through exact IK samples at knots
+    ``s``: exact values ``W``, first and second derivatives ``dW``, ``ddW`` there (central
+    differences of exact IK, :func:`joint_path`), a cubic Hermite spline between knots
+    (second derivatives interpolated linearly). toppra evaluates it at the knots only,
+    so its constraints are those of the exact path."""
+
+    def __init__(self, s: Array, W: Array, dW: Array, ddW: Array) -> None:
+        from scipy.interpolate import CubicHermiteSpline
+
+        self.s, self.W, self.dW, self.ddW = s, W, dW, ddW
+        self._herm = CubicHermiteSpline(s, W, dW)
+        self.dof = W.shape[1]
+        self.path_interval = np.array([s[0], s[-1]])
+
+    def __call__(self, ss: Any, order: int = 0) -> Array:
+        ss = np.asarray(ss, dtype=np.float64)
+        if ss.shape == self.s.shape and np.array_equal(ss, self.s):
+            return (self.W, self.dW, self.ddW)[order].copy()
+        if order == 2:
+            flat = np.atleast_1d(ss)
+            out = np.stack([np.interp(flat, self.s, c) for c in self.ddW.T], axis=-1)
+            return out if ss.ndim else out[0]
+        return self._herm(ss, order)
+
+
+def joint_path(
+    robot: Robot, base_inv: Array, path: CartesianPath, Q: Array, s: Array, h: float = 1e-4
+) -> JointPath:
+    """The :class:`JointPath` of ``path`` through IK samples Q (k, dof) at knots s (k,):
+    q' and q'' from exact IK at s +- h (one-sided at the ends; m of path parameter)."""
+    k, n = Q.shape
+    h = min(h, 0.25 * float(np.min(np.diff(s)))) if k > 1 else h
+    lo = np.where(s - h < 0.0, 0, -1)  # offsets (in h) of the three stencil points
+    lo = np.where(s + h > path.span, -2, lo)
+    offs = lo[:, None] + np.arange(3)[None, :]  # (k, 3)
+    ss = s[:, None] + h * offs
+    slope = np.gradient(Q, s, axis=0) if k > 2 else np.zeros_like(Q)
+    guess = (Q[:, None, :] + (h * offs)[:, :, None] * slope[:, None, :]).reshape(-1, n)
+    T = base_inv @ path.poses(ss.reshape(-1))
+    R, _ = refine_ik(robot, guess, T)
+    R = R.reshape(k, 3, n)
+    # derivatives at the stencil point with offset 0 (its index -lo in the stencil)
+    c = -lo
+    d1 = np.where(
+        (c == 1)[:, None],
+        (R[:, 2] - R[:, 0]) / (2 * h),
+        np.where((c == 0)[:, None], (-3 * R[:, 0] + 4 * R[:, 1] - R[:, 2]) / (2 * h),
+                 (3 * R[:, 2] - 4 * R[:, 1] + R[:, 0]) / (2 * h)),
+    )  # fmt: skip
+    d2 = (R[:, 0] - 2 * R[:, 1] + R[:, 2]) / (h * h)
+    ell = path.tool_length(s)
+    ratio = np.gradient(ell, s) if k > 1 else np.ones(k)
+    W = np.hstack([Q, ell[:, None]])
+    dW = np.hstack([d1, ratio[:, None]])
+    ddW = np.hstack([d2, np.zeros((k, 1))])
+    return JointPath(s, W, dW, ddW)
+
+
 def time_path(
     robot: Robot,
     base_inv: Array,
@@ -286,15 +348,14 @@ def time_path(
     bound the tool point, each as breakpoints (s, value) interpolated along the path
     (None: only the joints). Returns None when no time law exists (a start speed that
     cannot be brought to rest)."""
-    ta = _toppra()
+    _toppra()
     from toppra import algorithm, constraint
 
-    ell = path.tool_length(s_knots)
-    spline = ta.SplineInterpolator(s_knots, np.hstack([Q, ell[:, None]]))
+    spline = joint_path(robot, base_inv, path, Q, s_knots)
     vj = np.where(np.isfinite(limits.speed), limits.speed * JOINT_MARGIN, _UNLIMITED)
     aj = np.where(np.isfinite(limits.acceleration), limits.acceleration * JOINT_MARGIN, _UNLIMITED)
     v, a = np.append(vj, _UNLIMITED), np.append(aj, _UNLIMITED)
-    grid = s_knots if len(s_knots) >= _MIN_GRID else np.linspace(0.0, path.span, _MIN_GRID)
+    grid = s_knots
     tool_v = np.full(len(grid), _UNLIMITED) if speed is None else np.interp(grid, *speed)
     tool_a = (
         np.full(len(grid), _UNLIMITED) if acceleration is None else np.interp(grid, *acceleration)
