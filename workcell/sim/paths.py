@@ -232,7 +232,7 @@ class Blend(Piece):
         u = np.concatenate([[0.0], np.cumsum(seg)])
         self._t_of_u = CubicSpline(u, t)
         self.length = self.span = float(u[-1])
-        self.max_step = self.span / 24.0  # the corner is where the joints accelerate most
+        self.max_step = self.span / 64.0  # its curvature builds up fast: sample it densely
         self._rot_a, self._rot_b = rot_a, rot_b
         R = self.rotations(np.array([0.0, self.span]))
         self.angle = angle_between(R[0], R[1])

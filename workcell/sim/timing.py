@@ -174,7 +174,10 @@ class PathMotion:
         )
         speed = np.abs(d1) * sd[:, None] / vmax  # (N, dof+1)
         speed = np.maximum(speed[:-1], speed[1:])
-        acc = np.abs(d1[:-1] * sdd[:, None] + d2[:-1] * (sd[:-1, None] ** 2)) / amax[:-1]
+        acc = np.maximum(  # the time law's constant s_ddot at both ends of each interval
+            np.abs(d1[:-1] * sdd[:, None] + d2[:-1] * (sd[:-1, None] ** 2)) / amax[:-1],
+            np.abs(d1[1:] * sdd[:, None] + d2[1:] * (sd[1:, None] ** 2)) / amax[1:],
+        )
         ratios = np.concatenate([speed, acc], axis=1)
         labels = [f"{n} speed" for n in names] + [f"{n} acceleration" for n in names]
         best = np.argmax(ratios, axis=1)
