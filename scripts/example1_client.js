@@ -3,17 +3,37 @@
 // client of `workcell serve` (protocol v1, docs/protocol.md), no packages needed.
 //
 // Usage: node scripts/example1_client.js [PORT] [HOST] [TOKEN]
-//   (defaults 5260, 127.0.0.1; the token also from WORKCELL_TOKEN)
+//   (defaults 5260, 127.0.0.1; the token also from WORKCELL_TOKEN, else, for a server on
+//   this machine, from its user-only token file, as the Python client does)
 // Prints one JSON line: {"sim_time_s": ..., "frames": ..., "joints_deg": [...]}.
 // An error reply ends the program with exit status 1 and the error's type, as the
 // thesis's programs end.
 "use strict";
 
+const fs = require("fs");
 const net = require("net");
+const os = require("os");
+const path = require("path");
 
 const port = Number(process.argv[2] || 5260);
 const host = process.argv[3] || "127.0.0.1";
-const token = process.argv[4] || process.env.WORKCELL_TOKEN || null;
+const token = process.argv[4] || process.env.WORKCELL_TOKEN || localToken(port, host);
+
+// The token file `workcell serve` writes (docs/protocol.md, "Security").
+function localToken(port, host) {
+  if (!["127.0.0.1", "::1", "localhost"].includes(host)) return null;
+  const env = process.env;
+  const dir =
+    env.WORKCELL_RUNTIME_DIR ||
+    (env.XDG_RUNTIME_DIR
+      ? path.join(env.XDG_RUNTIME_DIR, "workcell")
+      : path.join(os.homedir(), ".local", "share", "workcell", "runtime"));
+  try {
+    return JSON.parse(fs.readFileSync(path.join(dir, `server-${port}.json`), "utf8")).token;
+  } catch {
+    return null;
+  }
+}
 const rad = (degrees) => degrees.map((d) => (d * Math.PI) / 180);
 
 const socket = net.createConnection({ port, host });
@@ -62,7 +82,7 @@ async function main() {
   if (hello.protocol !== "workcell" || hello.version !== 1) {
     throw new Error(`not a workcell protocol v1 server: ${JSON.stringify(hello)}`);
   }
-  if (hello.token_required || token) await call("hello", { version: 1, token });
+  await call("hello", { version: 1, token }); // the first message, always
   await call("example_cell", { name: "joints" });
   await call("simulate", { mode: "path", dt: 0.01 });
   // figure 5.1: speed 0.3 rad/s; relative move; absolute move; back to the start

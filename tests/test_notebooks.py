@@ -58,10 +58,17 @@ def _run(name: str, cwd: Path) -> tuple[str, list[np.ndarray]]:
     # Python), whatever "python3" kernels the user or the system has installed
     km = KernelManager(kernel_name="python3", kernel_spec_manager=KernelSpecManager(kernel_dirs=[]))
     assert km.kernel_spec.argv[0] == sys.executable
+    km.connection_file = str(cwd / "kernel.json")  # not a tmpXXXX.json in the system's /tmp
     client = NotebookClient(
         nb, km=km, timeout=120, resources={"metadata": {"path": str(cwd)}}, allow_errors=False
     )
-    client.execute()  # raises CellExecutionError with the cell and traceback on failure
+    try:
+        client.execute()  # raises CellExecutionError with the cell and traceback on failure
+    finally:  # nbclient leaves a kernel manager it was given running: stop it, remove its file
+        if km.has_kernel:
+            km.shutdown_kernel(now=True)
+        km.cleanup_resources()
+    assert not (cwd / "kernel.json").exists()
     text, images = [], []
     for cell in nb.cells:
         for out in cell.get("outputs", []):

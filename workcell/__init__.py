@@ -5,7 +5,7 @@ them with :mod:`workcell.spatial`, define robots and solve their kinematics with
 :mod:`workcell.robots`; every deliberate error is a :class:`WorkcellError`.
 """
 
-from workcell import robots, sim, solids, spatial
+from workcell import limits, robots, sim, solids, spatial
 from workcell.cell import CompiledCell, Workcell, compile_cell, export_cell
 from workcell.errors import (
     CollisionError,
@@ -13,11 +13,13 @@ from workcell.errors import (
     GraspError,
     JointLimitError,
     KinematicsError,
+    LimitError,
     ModelError,
     ProgramError,
     ProtocolError,
     RecordError,
     RenderError,
+    StudyError,
     UnreachableError,
     WorkcellError,
 )
@@ -37,6 +39,7 @@ __all__ = [
     "GraspError",
     "JointLimitError",
     "KinematicsError",
+    "LimitError",
     "MassProperties",
     "Model",
     "ModelError",
@@ -46,6 +49,7 @@ __all__ = [
     "Relation",
     "RenderError",
     "Simulator",
+    "StudyError",
     "Surface",
     "Timeline",
     "UnreachableError",
@@ -56,6 +60,7 @@ __all__ = [
     "__version__",
     "compile_cell",
     "export_cell",
+    "limits",
     "robots",
     "sim",
     "solids",

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import socket
 from typing import Any
 
@@ -61,7 +62,9 @@ _KEEPS_CELL = frozenset(
 class Client:
     """A connection to a workcell server (see the module doc).
 
-    ``token``: sent in the hello (required by servers on non-loopback addresses);
+    ``token``: sent in the hello; when None and the server asks for one, the
+    ``WORKCELL_TOKEN`` environment variable, else (for a server on this machine) its
+    token file (:mod:`workcell.program.tokens`), so local programs need not say it.
     ``timeout`` (s): for connecting and for each reply (None: wait as long as it takes).
     """
 
@@ -91,8 +94,15 @@ class Client:
                 f"server speaks protocol version {self.server_hello.get('version')}, "
                 f"this client {VERSION}"
             )
-        if token is not None or self.server_hello.get("token_required"):
-            self.call("hello", version=VERSION, token=token)
+        if token is None and self.server_hello.get("token_required"):
+            token = _local_token(host, port)
+            if token is None:
+                self.close()
+                raise ProtocolError(
+                    f"the server at {host}:{port} needs a token: pass token=..., set "
+                    "WORKCELL_TOKEN, or run on the server's machine as its user (token file)"
+                )
+        self.call("hello", version=VERSION, token=token)  # required before any command
 
     # ------------------------------------------------------------------ plumbing
     def _read(self) -> dict[str, Any]:
@@ -264,6 +274,17 @@ class Client:
     def example_cell(self, name: str) -> str:
         """Load one of the thesis's example cells: "joints", "pick-place", "handoff"."""
         return self.call("example_cell", name=name)
+
+
+def _local_token(host: str, port: int) -> str | None:
+    """WORKCELL_TOKEN, else the token file of a server on this machine (never sent to
+    another machine's server)."""
+    from workcell.program.tokens import is_loopback, read_token_file
+
+    env = os.environ.get("WORKCELL_TOKEN")
+    if env:
+        return env
+    return read_token_file(port) if is_loopback(host) else None
 
 
 def _list(v: Any) -> Any:

@@ -12,11 +12,13 @@ __all__ = [
     "GraspError",
     "JointLimitError",
     "KinematicsError",
+    "LimitError",
     "ModelError",
     "ProgramError",
     "ProtocolError",
     "RecordError",
     "RenderError",
+    "StudyError",
     "UnreachableError",
     "WorkcellError",
 ]
@@ -68,3 +70,12 @@ class RenderError(WorkcellError):
 
 class RecordError(WorkcellError):
     """A recording could not be written or streamed (bad path, viewer unreachable)."""
+
+
+class StudyError(WorkcellError):
+    """A study could not be set up or run (bad parameter, output folder of another study)."""
+
+
+class LimitError(WorkcellError):
+    """Work over a limit of :mod:`workcell.limits` was refused before it started (the
+    message names the limit and how to raise it)."""

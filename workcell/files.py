@@ -1,50 +1,342 @@
-"""Atomic file writes: every file the project writes goes through here (temp file + rename)."""
+"""Files: every file the project writes or reads by name goes through here.
+
+Writing (:func:`atomic_path`, :func:`atomic_write_bytes`, :func:`atomic_write_text`): a
+temp file beside the target, fsynced, then renamed over it, so readers see the old file
+or the new one, never a part. The target is resolved through symbolic links (the link's
+target is written, the link stays); a target that is not a regular file (a folder, a
+FIFO, a device) is refused; an existing file keeps its mode (and, when allowed, its
+owner). A temp file is removed on any error, on Ctrl-C and on SIGTERM. Every
+file-system failure (missing folder, not a folder, permission, read-only, name too long,
+disk full) becomes the caller's :class:`~workcell.errors.WorkcellError` subclass naming
+the path; :func:`check_writable` runs the same checks before expensive work starts.
+
+Reading (:func:`read_bytes`, :func:`read_text`, :func:`load_json`): bounded by the
+``max_file_bytes`` limit (:mod:`workcell.limits`; ``/dev/zero`` stops there), and a file
+that does not parse gives the caller's error class without echoing the file's content.
+
+Confinement (:func:`resolve_inside`): a file name taken relative to a root folder, refused
+when it could lead outside it (absolute, ``~``, ``..``, hidden names, symbolic links).
+"""
 
 from __future__ import annotations
 
 import contextlib
+import errno
+import json
 import os
+import signal
+import stat
 import tempfile
+import threading
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text"]
+from workcell import limits
+from workcell.errors import WorkcellError
+
+__all__ = [
+    "atomic_path",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "check_writable",
+    "install_sigterm_cleanup",
+    "load_json",
+    "make_folder",
+    "read_bytes",
+    "read_text",
+    "resolve_inside",
+]
+
+Error = type[WorkcellError]
+
+_REASONS = {
+    errno.ENOENT: "no such file or folder",
+    errno.ENOTDIR: "a part of the path is not a folder",
+    errno.EACCES: "permission denied",
+    errno.EPERM: "operation not permitted",
+    errno.EROFS: "read-only file system",
+    errno.ENAMETOOLONG: "file name too long",
+    errno.ENOSPC: "no space left on device",
+    errno.EDQUOT: "disk quota exceeded",
+    errno.EISDIR: "it is a folder",
+    errno.ELOOP: "too many levels of symbolic links",
+    errno.EEXIST: "it exists and is not a folder",
+}
+
+
+def _reason(exc: OSError) -> str:
+    return _REASONS.get(exc.errno or 0) or exc.strerror or str(exc)
+
+
+# ------------------------------------------------------------------ SIGTERM cleanup
+_live: set[str] = set()
+_live_lock = threading.Lock()
+_previous: Any = None
+_installed = False
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    with _live_lock:
+        tmps = list(_live)
+    for tmp in tmps:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+    if callable(_previous):
+        _previous(signum, frame)
+        return
+    signal.signal(signum, signal.SIG_DFL)  # die of the signal, as without us
+    os.kill(os.getpid(), signum)
+
+
+def install_sigterm_cleanup() -> bool:
+    """Make SIGTERM remove the temp files of writes in progress (then act as before).
+
+    Needs the main thread: :func:`atomic_path` calls it when it runs there; servers call
+    it at start for their worker threads. Returns whether the handler is installed.
+    """
+    global _previous, _installed
+    if _installed:
+        return True
+    if threading.current_thread() is not threading.main_thread():
+        return False
+    prev = signal.getsignal(signal.SIGTERM)
+    if prev is signal.SIG_IGN:
+        return False
+    _previous = prev if callable(prev) else None
+    signal.signal(signal.SIGTERM, _on_sigterm)
+    _installed = True
+    return True
+
+
+# ------------------------------------------------------------------ writing
+def _target(path: str | os.PathLike, error: Error) -> tuple[Path, os.stat_result | None]:
+    """The file a write to ``path`` replaces (symbolic links followed) and its stat."""
+    p = Path(os.path.realpath(os.fspath(path)))
+    try:
+        st = os.stat(p)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise error(f"cannot write '{path}': {_reason(exc)}") from exc
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        kind = "a folder" if stat.S_ISDIR(st.st_mode) else _kind(st.st_mode)
+        raise error(
+            f"cannot write '{path}': it is {kind}, not a regular file; refusing to replace it"
+        )
+    folder = p.parent
+    try:
+        fst = os.stat(folder)
+    except OSError as exc:
+        why = (
+            f"folder '{folder}' does not exist"
+            if isinstance(exc, FileNotFoundError)
+            else _reason(exc)
+        )
+        raise error(f"cannot write '{path}': {why}") from exc
+    if not stat.S_ISDIR(fst.st_mode):
+        raise error(f"cannot write '{path}': '{folder}' is not a folder")
+    try:
+        name_max = os.pathconf(folder, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        name_max = 255
+    if len(os.fsencode(p.name)) > name_max:
+        raise error(f"cannot write '{path}': file name too long (at most {name_max} bytes)")
+    return p, st
+
+
+def _kind(mode: int) -> str:
+    for test, kind in (
+        (stat.S_ISFIFO, "a FIFO"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
+        if test(mode):
+            return kind
+    return "not a regular file"
+
+
+def _mkstemp(p: Path, suffix: str, path: object, error: Error) -> str:
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{p.name[:80]}.", suffix=suffix, dir=p.parent)
+    except OSError as exc:
+        raise error(f"cannot write '{path}': {_reason(exc)}") from exc
+    os.close(fd)
+    return tmp
+
+
+def check_writable(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
+    """Check that ``path`` can be written (the checks of :func:`atomic_path`, plus a real
+    temp file created and removed in its folder); return the file that would be written.
+
+    Call it before expensive work whose result goes to ``path``.
+    """
+    p, _ = _target(path, error)
+    os.unlink(_mkstemp(p, ".probe", path, error))
+    return p
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[str]:
-    """A temp file name beside ``path`` for a writer that needs a file name; when the
-    block succeeds the file is fsynced, given the usual mode (0666 less the umask, not
-    mkstemp's 0600) and renamed over ``path``; on any error it is removed and ``path`` is
-    left as it was. ``suffix``: the temp file's ending (some writers choose the format
-    by it)."""
-    p = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=suffix, dir=p.parent)
-    os.close(fd)
+def atomic_path(
+    path: str | os.PathLike,
+    suffix: str = ".tmp",
+    *,
+    error: Error = WorkcellError,
+    mode: int | None = None,
+) -> Iterator[str]:
+    """A temp file name beside ``path`` for a writer that needs a file name.
+
+    When the block succeeds the file is fsynced, given ``mode`` (default: the mode of the
+    file it replaces; a new file 0666 less the umask; the temp file is 0600 until then)
+    and renamed over ``path`` (through symbolic links);
+    on any error, Ctrl-C or SIGTERM it is removed and ``path`` is left as it was.
+    File-system failures raise ``error`` naming the path (see the module doc); so does an
+    OSError raised in the block. ``suffix``: the temp file's ending (some writers choose
+    the format by it).
+    """
+    p, st = _target(path, error)
+    install_sigterm_cleanup()
+    tmp = _mkstemp(p, suffix, path, error)
+    with _live_lock:
+        _live.add(tmp)
     try:
-        yield tmp
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, p)
+        try:
+            yield tmp
+            with open(tmp, "rb+") as f:
+                os.fsync(f.fileno())
+            if mode is not None:
+                os.chmod(tmp, mode)
+            elif st is not None:
+                os.chmod(tmp, stat.S_IMODE(st.st_mode))
+                with contextlib.suppress(OSError):  # keep the owner where we may
+                    if (st.st_uid, st.st_gid) != (os.getuid(), os.getgid()):
+                        os.chown(tmp, st.st_uid, st.st_gid)
+            else:
+                umask = os.umask(0)
+                os.umask(umask)
+                os.chmod(tmp, 0o666 & ~umask)
+            os.replace(tmp, p)
+        except OSError as exc:
+            raise error(f"cannot write '{path}': {_reason(exc)}") from exc
     except BaseException:
-        if os.path.exists(tmp):
+        with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
+    finally:
+        with _live_lock:
+            _live.discard(tmp)
 
 
-def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically: a temp file in the same folder, fsync, rename.
-
-    Readers see the old file or the new one, never a part; on any error the temp file is
-    removed and the old file is left as it was (see :func:`atomic_path`).
-    """
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+def atomic_write_bytes(
+    path: str | os.PathLike, data: bytes, *, error: Error = WorkcellError, mode: int | None = None
+) -> None:
+    """Write ``data`` to ``path`` atomically (see :func:`atomic_path`)."""
+    with atomic_path(path, error=error, mode=mode) as tmp, open(tmp, "wb") as f:
         f.write(data)
 
 
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write UTF-8 ``text`` to ``path`` atomically (see :func:`atomic_write_bytes`)."""
-    atomic_write_bytes(path, text.encode("utf-8"))
+def atomic_write_text(
+    path: str | os.PathLike, text: str, *, error: Error = WorkcellError, mode: int | None = None
+) -> None:
+    """Write UTF-8 ``text`` to ``path`` atomically (see :func:`atomic_path`)."""
+    atomic_write_bytes(path, text.encode("utf-8"), error=error, mode=mode)
+
+
+def make_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
+    """Create folder ``path`` and its parents when missing; ``error`` naming the path if not."""
+    p = Path(path)
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise error(f"cannot create folder '{path}': {_reason(exc)}") from exc
+    return p
+
+
+# ------------------------------------------------------------------ reading
+def read_bytes(
+    path: str | os.PathLike, *, what: str = "file", error: Error = WorkcellError
+) -> bytes:
+    """The bytes of ``path``, at most ``max_file_bytes`` (:mod:`workcell.limits`): a larger
+    file raises LimitError (a device such as /dev/zero stops at the limit); ``error`` for
+    a file that cannot be read, a folder, a FIFO or a socket."""
+    bound = limits.current().max_file_bytes
+    try:
+        fd = os.open(os.fspath(path), os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError as exc:
+        raise error(f"cannot read {what} '{path}': {_reason(exc)}") from exc
+    try:
+        st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise error(f"cannot read {what} '{path}': it is a folder")
+        if not (stat.S_ISREG(st.st_mode) or stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode)):
+            raise error(f"cannot read {what} '{path}': it is {_kind(st.st_mode)}")
+        if stat.S_ISREG(st.st_mode):
+            limits.check("max_file_bytes", st.st_size, f"{what} '{path}'")
+        with os.fdopen(os.dup(fd), "rb") as f:
+            data = f.read(bound + 1)
+    except OSError as exc:
+        raise error(f"cannot read {what} '{path}': {_reason(exc)}") from exc
+    finally:
+        os.close(fd)
+    limits.check("max_file_bytes", len(data), f"{what} '{path}' (read stopped there)")
+    return data
+
+
+def read_text(path: str | os.PathLike, *, what: str = "file", error: Error = WorkcellError) -> str:
+    """The UTF-8 text of ``path`` (bounded as :func:`read_bytes`)."""
+    data = read_bytes(path, what=what, error=error)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise error(f"{what} '{path}' is not UTF-8 text") from None
+
+
+def load_json(path: str | os.PathLike, *, what: str = "file", error: Error = WorkcellError) -> Any:
+    """Parse the JSON file ``path`` (bounded as :func:`read_bytes`). A file that does not
+    parse (bad syntax, nesting too deep for the parser, an integer of more
+    than 4300 digits) raises ``error`` saying where, never quoting the file."""
+    text = read_text(path, what=what, error=error)
+    where = f"{what} '{path}'"
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise error(
+            f"{where} is not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})"
+        ) from None
+    except RecursionError:
+        raise error(f"{where} is not a workcell file: its JSON is nested too deeply") from None
+    except ValueError as exc:
+        msg = str(exc)
+        why = "an integer has more than 4300 digits" if "digits" in msg else msg.split(";")[0]
+        raise error(f"{where} is not valid JSON: {why}") from None
+
+
+# ------------------------------------------------------------------ confinement
+def resolve_inside(root: str | os.PathLike, name: object, *, error: Error = WorkcellError) -> Path:
+    """The file ``name`` (relative) inside folder ``root``, symbolic links resolved.
+
+    Refused (``error``): a name that is not a non-empty string, absolute paths, ``~``,
+    ``..``, hidden names (a part starting with '.'), NUL characters, and anything that
+    resolves outside ``root`` through a symbolic link. The message is the same whether
+    or not the file exists.
+    """
+    if not isinstance(name, str) or not name.strip():
+        raise error(f"a file name must be a non-empty string, got {name!r}")
+    rule = (
+        "file names are relative to the server's root folder: no absolute paths, '~', "
+        "'..' or hidden ('.') names"
+    )
+    parts = Path(name).parts
+    if (
+        "\x00" in name
+        or os.path.isabs(name)
+        or name.startswith("~")
+        or any(part == ".." or part.startswith(".") for part in parts)
+    ):
+        raise error(f"file name {name!r} refused: {rule}")
+    real_root = os.path.realpath(os.fspath(root))
+    full = os.path.realpath(os.path.join(real_root, name))
+    if os.path.commonpath([full, real_root]) != real_root:
+        raise error(f"file name {name!r} refused: it leads outside the server's root folder")
+    return Path(full)

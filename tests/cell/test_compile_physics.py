@@ -15,10 +15,9 @@ import pytest
 from workcell.cell import compile_cell
 from workcell.cell.compile import INITIAL_KEY, export_cell
 from workcell.errors import GeometryError
+from workcell.meshgeoms import CONTACT_SOLIMP, CONTACT_SOLREF
 from workcell.robots.mjcf import (
     ARMATURE,
-    CONTACT_SOLIMP,
-    CONTACT_SOLREF,
     SERVO_DAMPING,
     SERVO_FREQUENCY,
     robot_spec,

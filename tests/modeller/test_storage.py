@@ -365,7 +365,7 @@ DAMAGES = {
         ["surfaces[0] 'square1'"],
     ),
     "unknown-version": (_damage(lambda d: d.update(version=2)), ["version 2"]),
-    "version-string": (_damage(lambda d: d.update(version="1")), ["version '1'"]),
+    "version-string": (_damage(lambda d: d.update(version="1")), ["version (a str)"]),
     "version-bool": (_damage(lambda d: d.update(version=True)), ["version True"]),
     "version-missing": (_damage(lambda d: d.pop("version")), ["version"]),
     "wrong-format": (_damage(lambda d: d.update(format="other-model")), ["format"]),

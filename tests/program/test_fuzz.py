@@ -125,10 +125,12 @@ def fuzz_session(base_dir) -> Session:
 def too_slow(c: object) -> bool:
     """Commands that are valid but would make later moves take minutes (a speed of a
     fraction of a degree per second, a fine sampling interval, a line sampled every few
-    micrometres): the fuzz test skips them; they are no different in kind from others."""
+    micrometres) or would replay the run in real time (after a 'wait 1e6', for days): the
+    fuzz test skips them; they are no different in kind from others."""
     return (
         (isinstance(c, simc.SetSpeed) and c.speed < 0.1)
-        or (isinstance(c, simc.Simulate) and c.dt < 0.01)
+        or (isinstance(c, simc.Simulate) and (c.dt < 0.01 or c.realtime))
+        or (isinstance(c, simc.Play) and c.realtime)
         or (isinstance(c, simc.MoveStraightLine) and c.step < 1e-3)
     )
 

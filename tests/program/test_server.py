@@ -20,6 +20,7 @@ from workcell.examples import thesis_joints
 from workcell.program import Session
 from workcell.program.protocol import MAX_MESSAGE_BYTES, to_jsonable
 from workcell.program.server import Server, is_loopback
+from workcell.program.tokens import read_token_file
 from workcell.sim.timeline import Event
 
 TOKEN = "s3cret-token-123"
@@ -34,12 +35,17 @@ def server():
 
 
 class Raw:
-    """A bare protocol connection: lines in, lines out."""
+    """A bare protocol connection: lines in, lines out; says hello (with the server's
+    token from its token file) unless ``hello=False``."""
 
-    def __init__(self, port: int, host: str = "127.0.0.1") -> None:
+    def __init__(self, port: int, host: str = "127.0.0.1", *, hello: bool = True) -> None:
         self.sock = socket.create_connection((host, port), timeout=10)
         self.r = self.sock.makefile("rb")
         self.hello = json.loads(self.r.readline())
+        if hello:
+            token = read_token_file(port)
+            r = self.ask({"id": 0, "command": "hello", "args": {"version": 1, "token": token}})
+            assert r["result"]["protocol"] == "workcell", r
 
     def send(self, data: bytes) -> None:
         self.sock.sendall(data)
@@ -71,7 +77,8 @@ def test_hello_says_protocol_version_and_bound(server):
         "server": raw.hello["server"],
         "max_message_bytes": MAX_MESSAGE_BYTES,
         "sessions": "own",
-        "token_required": False,
+        "token_required": True,
+        "idle_timeout_s": 300.0,
     }
     assert raw.ask({"id": "a", "command": "hello", "args": {"version": 1}})["id"] == "a"
     r = raw.ask({"id": 7, "command": "commands"})
@@ -265,28 +272,28 @@ def test_a_shared_session_serialises_the_clients():
         srv.stop()
 
 
-def test_binding_beyond_loopback_needs_a_token_and_clients_must_send_it():
+def test_binding_beyond_loopback_needs_a_token_and_clients_must_send_it(monkeypatch):
     assert is_loopback("127.0.0.1")
     assert is_loopback("localhost")
     assert is_loopback("::1")
     assert not is_loopback("0.0.0.0")
     with pytest.raises(ProgramError, match="without a token"):
-        Server("0.0.0.0", 0)
+        Server("0.0.0.0", 0, require_token=False)
     with pytest.raises(ProgramError, match="at least 8"):
         Server("127.0.0.1", 0, token="short")
-    srv = Server("0.0.0.0", 0, token=TOKEN)
+    srv = Server("0.0.0.0", 0, token=TOKEN, bad_token_delay=0.01)
     srv.serve_in_thread()
     try:
-        raw = Raw(srv.port)
+        raw = Raw(srv.port, hello=False)
         assert raw.hello["token_required"] is True
-        r = raw.ask({"id": 1, "command": "list"})
-        assert r["error"]["type"] == "ProtocolError"
-        assert "needs a token" in r["error"]["message"]
         r = raw.ask({"id": 2, "command": "hello", "args": {"token": "wrong-token-000"}})
         assert "wrong or missing token" in r["error"]["message"]
         assert raw.r.readline() == b""  # closed
         raw.close()
         with pytest.raises(ProtocolError, match="wrong or missing token"):
+            Client(port=srv.port, token="wrong-token-000")
+        monkeypatch.setenv("WORKCELL_RUNTIME_DIR", "/nonexistent")  # no token file
+        with pytest.raises(ProtocolError, match="needs a token"):
             Client(port=srv.port)
         with Client(port=srv.port, token=TOKEN) as c:
             assert c.call("list", "scene") == []
@@ -354,7 +361,17 @@ def test_workcell_serve_runs_example_1_for_a_client():
 
 def test_workcell_serve_refuses_a_public_address_without_a_token():
     r = subprocess.run(
-        [sys.executable, "-m", "workcell.program.cli", "serve", "--host", "0.0.0.0", "--port", "0"],
+        [
+            sys.executable,
+            "-m",
+            "workcell.program.cli",
+            "serve",
+            "--host",
+            "0.0.0.0",
+            "--port",
+            "0",
+            "--no-token",
+        ],
         capture_output=True,
         text=True,
         timeout=60,

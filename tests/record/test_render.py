@@ -374,3 +374,23 @@ def test_cli_info_lists_limits_parts_cameras_and_reach(cli, tmp_path, capsys):
     assert "near" in text
     assert "NOT reachable" in text
     assert "-76.00" in text
+
+
+def test_picture_functions_are_annotated_with_what_they_return(ex1, two):
+    """help() and type checkers show what comes back: an ndarray of uint8, not an 'Image'."""
+    import typing
+
+    from workcell.record import render
+
+    pictures = (
+        (render_frame, render_frame(ex1, 0, width=64, height=48)),
+        (render_cell, render_cell(two, width=64, height=48)),
+    )
+    for fn, value in pictures:
+        text = fn.__annotations__["return"]  # what help() shows
+        assert text.startswith("NDArray["), (fn.__name__, text)
+        hint = eval(text, vars(render))
+        assert typing.get_origin(hint) is np.ndarray, (fn.__name__, hint)
+        assert isinstance(value, np.ndarray)
+        assert value.dtype == np.uint8
+        assert value.shape == (48, 64, 3)

@@ -95,7 +95,7 @@ def test_upper_arm_and_forearm_span_their_dh_lengths(name):
     """The upper arm covers shoulder to elbow (a2 along x2); the forearm reaches the wrist centre."""
     robot = PUMAS[name]
     F = robot.link_frames(robot.pose("home"))
-    a2, d4 = robot.joints[1].a, robot.joints[3].d
+    a2, d4 = robot.joints[1].dh.a, robot.joints[3].dh.d
     (upper,) = link_solids(robot, 2, F)
     local = spatial.transform_points(spatial.invert(F[2]), upper)
     assert local[:, 0].min() < -a2
@@ -106,7 +106,7 @@ def test_upper_arm_and_forearm_span_their_dh_lengths(name):
     # the pedestal stands on the floor of the base frame, below the shoulder height d1
     ped = np.concatenate(link_solids(robot, 0, F))
     assert ped[:, 2].min() == pytest.approx(0.0, abs=1e-12)
-    assert ped[:, 2].max() < robot.joints[0].d
+    assert ped[:, 2].max() < robot.joints[0].dh.d
 
 
 def test_puma260_cross_sections_scale_with_the_arm():
@@ -132,7 +132,7 @@ def test_flange_sits_at_the_tool_of_the_260_and_at_d6_on_the_560():
 
 
 def test_geometry_refuses_non_puma_robots():
-    two = Robot("two", (Joint("a", a=0.3), Joint("b", a=0.2)))
+    two = Robot("two", (Joint.from_dh("a", a=0.3), Joint.from_dh("b", a=0.2)))
     with pytest.raises(KinematicsError, match="6-joint"):
         puma_geometry(two, scale=1.0)
     with pytest.raises(KinematicsError, match="scale"):

@@ -1,4 +1,4 @@
-"""Closed-form Puma IK against checks from outside the solver.
+"""Closed-form IK of the Pumas (the OPW family) against checks from outside the solver.
 
 - Round trips: ``Robot.fk`` (the project's general DH chain, itself tested against the
   thesis formulation and MuJoCo) of every returned q reproduces the target pose.
@@ -27,14 +27,8 @@ from hypothesis import strategies as st
 
 from workcell import spatial
 from workcell.errors import GeometryError, KinematicsError
-from workcell.robots import Robot, ik_closed, puma260, puma560
-from workcell.robots.ik_closed import (
-    CONFIGS,
-    puma_config,
-    puma_ik,
-    puma_ik_batch,
-    puma_ik_report,
-)
+from workcell.robots import Joint, Robot, ik_closed, puma260, puma560
+from workcell.robots.ik_closed import CONFIGS, config_of, ik_all, ik_batch, ik_report
 
 P560 = puma560(geometry=False)
 P260 = puma260(geometry=False)
@@ -45,6 +39,12 @@ MOUNTED = P560.with_(
 )
 ROBOTS = {"puma560": P560, "puma260": P260, "mounted": MOUNTED}
 TWO_PI = 2 * np.pi
+
+
+def with_dh(joint, **changes):
+    """The joint rebuilt from its DH row with some DH entries (or the convention) changed."""
+    row = {**dataclasses.asdict(joint.dh), **changes}
+    return Joint.from_dh(joint.name, **row, limits=joint.limits, max_speed=joint.max_speed)
 
 
 def wrapped(a):
@@ -78,7 +78,7 @@ def geometric_config(robot, q):
     w, e = arm_plane(robot, q)
     arm = "r" if w[0] >= 0 else "l"
     above = (e[1] - w[1] * e[0] / w[0]) > 0  # elbow height over the line at the elbow's x
-    wrist = "n" if np.sin(q[4] + robot.joints[4].offset) < 0 else "f"
+    wrist = "n" if np.sin(q[4] + robot.joints[4].dh.offset) < 0 else "f"
     return arm + ("u" if above else "d") + wrist
 
 
@@ -92,7 +92,7 @@ def arm_margin(robot, q):
 
 def margin(robot, q):
     """How far q is from every configuration boundary (dimensionless; 0 on one)."""
-    return min(arm_margin(robot, q), abs(np.sin(q[4] + robot.joints[4].offset)))
+    return min(arm_margin(robot, q), abs(np.sin(q[4] + robot.joints[4].dh.offset)))
 
 
 def has_in_limit_equivalent(robot, q):
@@ -135,7 +135,7 @@ def test_generating_q_is_found_with_its_geometric_config(name, data):
     robot = ROBOTS[name]
     q = data.draw(joint_vectors(robot))
     assume(margin(robot, q) > 1e-3)
-    sols = puma_ik(robot, robot.fk(q))
+    sols = ik_all(robot, robot.fk(q))
     assert len(sols) == 8  # a generic reachable pose of a Puma has 8 solutions
     gap = [np.abs(wrapped(s.q - q)).max() for s in sols]
     match = sols[int(np.argmin(gap))]
@@ -147,8 +147,8 @@ def test_generating_q_is_found_with_its_geometric_config(name, data):
     for s in sols:
         if margin(robot, s.q) > 1e-6:
             assert s.config == geometric_config(robot, s.q)
-            assert puma_config(robot, s.q) == s.config
-    assert puma_config(robot, q) == geometric_config(robot, q)
+            assert config_of(robot, s.q) == s.config
+    assert config_of(robot, q) == geometric_config(robot, q)
 
 
 def test_qn_has_eight_solutions_and_is_right_arm_elbow_up():
@@ -156,7 +156,7 @@ def test_qn_has_eight_solutions_and_is_right_arm_elbow_up():
     # toolbox recovers it with ikine6s(T, 'ru'): right arm, elbow up; q5 = +45 deg means
     # sin(theta5) > 0, the wrist letter f (ikine6s gives sin(theta5) < 0 for an explicit n)
     qn = P560.pose("qn")
-    sols = puma_ik(P560, P560.fk(qn))
+    sols = ik_all(P560, P560.fk(qn))
     assert len(sols) == 8
     assert {s.config for s in sols} == set(CONFIGS)
     by_config = {s.config: s for s in sols}
@@ -169,8 +169,8 @@ def test_qn_has_eight_solutions_and_is_right_arm_elbow_up():
     w, e = arm_plane(P560, np.zeros(6))
     assert w[0] > 0
     assert e[1] < w[1] * e[0] / w[0]
-    assert puma_config(P560, np.zeros(6)) == "rdn"
-    assert puma_config(P560, qn) == "ruf"
+    assert config_of(P560, np.zeros(6)) == "rdn"
+    assert config_of(P560, qn) == "ruf"
 
 
 # ---------------------------------------------------------------- joint limits
@@ -181,7 +181,7 @@ def test_within_limits_flags_and_representatives(robot):
     for _ in range(150):
         q = rng.uniform(robot.lower, robot.upper)
         q_current = rng.uniform(robot.lower, robot.upper) if rng.random() < 0.5 else None
-        for s in puma_ik(robot, robot.fk(q), q_current):
+        for s in ik_all(robot, robot.fk(q), q_current):
             seen[s.within_limits] += 1
             assert s.within_limits == has_in_limit_equivalent(robot, s.q)
             if s.within_limits:
@@ -203,9 +203,9 @@ def test_puma260_nearest_representative_of_wide_joint4():
     q = np.radians([10.0, 20.0, -100.0, 10.0, 40.0, 30.0])
     T = P260.fk(q)
     near = np.radians([10.0, 20.0, -100.0, 350.0, 40.0, 30.0])
-    best = puma_ik(P260, T, near)[0]
+    best = ik_all(P260, T, near)[0]
     np.testing.assert_allclose(best.q, q + np.array([0, 0, 0, TWO_PI, 0, 0]), atol=1e-10)
-    plain = [s for s in puma_ik(P260, T) if np.abs(wrapped(s.q - q)).max() < 1e-9]
+    plain = [s for s in ik_all(P260, T) if np.abs(wrapped(s.q - q)).max() < 1e-9]
     np.testing.assert_allclose(plain[0].q, q, atol=1e-10)
 
 
@@ -221,12 +221,12 @@ def test_order_nearest_to_q_current_first(name):
             continue
         tested += 1
         q_current = q + rng.uniform(-0.01, 0.01, 6)
-        sols = puma_ik(robot, robot.fk(q), q_current)
+        sols = ik_all(robot, robot.fk(q), q_current)
         np.testing.assert_allclose(sols[0].q, q, atol=1e-8)
         keys = [(not s.within_limits, np.abs(s.q - q_current).max()) for s in sols]
         assert keys == sorted(keys)
         # no q_current: within limits first, then the fixed order lun, luf, ldn, ...
-        plain = puma_ik(robot, robot.fk(q))
+        plain = ik_all(robot, robot.fk(q))
         keys = [(not s.within_limits, CONFIGS.index(s.config)) for s in plain]
         assert keys == sorted(keys)
     assert tested >= 10
@@ -250,7 +250,7 @@ def test_aligned_wrist_takes_q4_from_q_current(name):
         T = robot.fk(q)
         q_current = rng.uniform(robot.lower, robot.upper)
         for qc, q4 in ((None, 0.0), (q_current, q_current[3])):
-            sols = puma_ik(robot, T, qc)
+            sols = ik_all(robot, T, qc)
             assert len(sols) == 7
             singular = [s for s in sols if s.singular]
             assert len(singular) == 1
@@ -268,7 +268,7 @@ def test_aligned_wrist_takes_q4_from_q_current(name):
 
 def test_puma260_zero_pose_is_singular_and_exact():
     T = P260.fk(np.zeros(6))
-    sols, reason = puma_ik_report(P260, T)
+    sols, reason = ik_report(P260, T)
     assert reason == ""
     zero = [s for s in sols if np.abs(wrapped(s.q)).max() < 1e-10]
     assert len(zero) == 1
@@ -286,7 +286,7 @@ def test_near_singular_wrist_is_flagged_and_exact():
     q = P560.pose("qn").copy()
     q[4] = 1e-8  # |sin q5| < 1e-6 but the wrist axes are not aligned
     T = P560.fk(q)
-    sols = puma_ik(P560, T)
+    sols = ik_all(P560, T)
     assert len(sols) == 8
     flagged = [s for s in sols if s.singular]
     assert sorted(s.config for s in flagged) == ["ruf", "run"]  # the generating branch
@@ -298,7 +298,7 @@ def test_near_singular_wrist_is_flagged_and_exact():
 # ---------------------------------------------------------------- reach
 def reach_radii(robot):
     """Inner and outer radii (m) of the wrist-centre workspace about the shoulder, by hand."""
-    j = robot.joints
+    j = [jt.dh for jt in robot.joints]
     a2, a3, d3, d4 = j[1].a, j[2].a, j[2].d, j[3].d
     L = math.hypot(a3, d4)
     return math.hypot(L - a2, d3), math.hypot(a2 + L, d3)
@@ -316,7 +316,7 @@ def pose_with_wrist_centre(robot, p_wc, R=None):
 @pytest.mark.parametrize("name", list(ROBOTS))
 def test_reach_boundaries(name):
     robot = ROBOTS[name]
-    d1, d3 = robot.joints[0].d, robot.joints[2].d
+    d1, d3 = robot.joints[0].dh.d, robot.joints[2].dh.d
     inner, outer = reach_radii(robot)
     # along theta1 = 0 the shoulder offset points along -y: the wrist centre at
     # (rho, -d3, d1) lies at sqrt(rho^2 + d3^2) from the shoulder
@@ -328,7 +328,7 @@ def test_reach_boundaries(name):
     ]
     for rho, n_expected, words in cases:
         T = pose_with_wrist_centre(robot, [rho, -d3, d1])
-        sols, reason = puma_ik_report(robot, T)
+        sols, reason = ik_report(robot, T)
         assert len(sols) == n_expected
         assert words in reason
         for s in sols:
@@ -338,19 +338,19 @@ def test_reach_boundaries(name):
 @pytest.mark.parametrize("name", list(ROBOTS))
 def test_unreachable_poses_give_empty_list_and_reason(name):
     robot = ROBOTS[name]
-    d1 = robot.joints[0].d
+    d1 = robot.joints[0].dh.d
     far = pose_with_wrist_centre(robot, [2.0, 0.0, d1])
-    assert puma_ik(robot, far) == []
+    assert ik_all(robot, far) == []
     assert robot.ik_closed_form(far) == []
-    sols, reason = puma_ik_report(robot, far)
+    sols, reason = ik_report(robot, far)
     assert sols == []
     assert "reach" in reason
     # on the joint 1 axis, inside the shoulder-offset cylinder of radius |d3|
     axis = pose_with_wrist_centre(robot, [0.0, 0.0, d1 + 0.2])
-    sols, reason = puma_ik_report(robot, axis)
+    sols, reason = ik_report(robot, axis)
     assert sols == []
     assert "cylinder" in reason
-    Q, valid = puma_ik_batch(robot, np.stack([far, axis]))
+    Q, valid = ik_batch(robot, np.stack([far, axis]))
     assert np.isnan(Q).all()
     assert not valid.any()
 
@@ -358,13 +358,14 @@ def test_unreachable_poses_give_empty_list_and_reason(name):
 def test_zero_shoulder_offset_wrist_on_the_axis():
     # a Puma-like arm with d3 = a3 = 0: a wrist centre on the joint 1 axis leaves q1 free
     joints = list(P560.joints)
-    joints[2] = replace(joints[2], a=0.0, d=0.0)
-    robot = Robot(name="no_offset", joints=tuple(joints), family="puma")
+    joints[2] = with_dh(joints[2], a=0.0, d=0.0)
+    robot = Robot(name="no_offset", joints=tuple(joints))
+    assert robot.ik_family == "opw"
     q = np.array([0.0, np.pi / 3, -np.pi / 6, 0.2, 0.5, -0.3])  # a2 cos q2 = d4 sin(q2 + q3)
     T = robot.fk(q)
     assert np.hypot(*robot.link_frames(q)[4][:2, 3]) < 1e-12
     q_current = np.array([0.3, 0.0, 0.0, 0.0, 0.0, 0.0])
-    sols = puma_ik(robot, T, q_current)
+    sols = ik_all(robot, T, q_current)
     assert sols
     assert any(abs(wrapped(s.q[0] - 0.3)) < 1e-12 for s in sols)
     for s in sols:
@@ -385,11 +386,11 @@ def test_batch_equals_single(name):
         Ts.append(robot.base @ R @ robot.tool)
     Ts = np.array(Ts)
     for q_current in (None, rng.uniform(robot.lower, robot.upper)):
-        Q, valid = puma_ik_batch(robot, Ts, q_current)
+        Q, valid = ik_batch(robot, Ts, q_current)
         assert Q.shape == (len(Ts), 8, 6)
         assert valid.shape == (len(Ts), 8)
         for n, T in enumerate(Ts):
-            sols = puma_ik(robot, T, q_current)
+            sols = ik_all(robot, T, q_current)
             present = ~np.isnan(Q[n]).any(axis=1)
             assert {s.config for s in sols} == {
                 c for c, p in zip(CONFIGS, present, strict=True) if p
@@ -408,42 +409,41 @@ def test_batch_fk_round_trip_and_single_pose():
     rng = np.random.default_rng(9)
     q = rng.uniform(P260.lower, P260.upper, size=(500, 6))
     Ts = P260.fk_batch(q)
-    Q, _ = puma_ik_batch(P260, Ts)
+    Q, _ = ik_batch(P260, Ts)
     rows, slots = np.nonzero(~np.isnan(Q).any(axis=-1))
     err = np.abs(P260.fk_batch(Q[rows, slots]) - Ts[rows]).max()
     assert err < 1e-10
-    Q1, _ = puma_ik_batch(P260, Ts[0])
+    Q1, _ = ik_batch(P260, Ts[0])
     assert Q1.shape == (1, 8, 6)
     np.testing.assert_array_equal(Q1[0], Q[0])
 
 
 # ---------------------------------------------------------------- errors
-def test_refuses_non_puma_robots_and_bad_input():
+def test_refuses_robots_without_a_family_and_bad_input():
     joints = list(P560.joints)
-    joints[3] = replace(joints[3], a=0.05)
-    bent = Robot(name="bent", joints=tuple(joints), family="puma")
-    with pytest.raises(KinematicsError, match=r"a4 = 0\.05"):
-        puma_ik(bent, P560.fk(np.zeros(6)))
+    joints[3] = with_dh(joints[3], a=0.05)  # axes 4 and 5 now miss each other by 5 cm
+    bent = Robot(name="bent", joints=tuple(joints))
+    assert bent.ik_family is None
+    with pytest.raises(KinematicsError, match=r"no closed-form IK.*miss each other by 50 mm"):
+        ik_all(bent, P560.fk(np.zeros(6)))
     with pytest.raises(KinematicsError, match="no closed-form"):
-        P560.with_(family=None).ik_closed_form(np.eye(4))
-    with pytest.raises(KinematicsError, match="modified"):
-        puma_ik(P560.with_(convention="modified"), np.eye(4))
+        bent.ik_closed_form(np.eye(4))
     with pytest.raises(GeometryError, match="4x4"):
-        puma_ik(P560, np.eye(3))
+        ik_all(P560, np.eye(3))
     with pytest.raises(GeometryError, match="non-finite"):
-        puma_ik(P560, np.full((4, 4), np.nan))
+        ik_all(P560, np.full((4, 4), np.nan))
     skew = P560.fk(np.zeros(6))
     skew[0, 0] = 1.1
     with pytest.raises(GeometryError, match="not rigid"):
-        puma_ik(P560, skew)
+        ik_all(P560, skew)
     with pytest.raises(GeometryError, match="not rigid"):
-        puma_ik_batch(P560, skew[None])
+        ik_batch(P560, skew[None])
     with pytest.raises(KinematicsError, match="q_current"):
-        puma_ik(P560, P560.fk(np.zeros(6)), np.zeros(5))
+        ik_all(P560, P560.fk(np.zeros(6)), np.zeros(5))
     with pytest.raises(KinematicsError, match="q_current"):
-        puma_ik_batch(P560, P560.fk(np.zeros(6))[None], np.zeros((2, 6)))
+        ik_batch(P560, P560.fk(np.zeros(6))[None], np.zeros((2, 6)))
     with pytest.raises(KinematicsError, match="6 finite"):
-        puma_config(P560, np.zeros(5))
+        config_of(P560, np.zeros(5))
 
 
 def test_changed_base_and_tool_are_seen():
@@ -451,7 +451,7 @@ def test_changed_base_and_tool_are_seen():
     # a new robot that must be solved afresh
     robot = P560.with_(name="moving")
     q = P560.pose("qn")
-    assert puma_ik(robot, robot.fk(q))
+    assert ik_all(robot, robot.fk(q))
     with pytest.raises(dataclasses.FrozenInstanceError):
         robot.base = spatial.translation(0.3, 0.1, 0.0)
     robot = robot.with_(
@@ -459,7 +459,7 @@ def test_changed_base_and_tool_are_seen():
         tool=spatial.translation(0.0, 0.0, 0.2),
     )
     T = robot.fk(q)
-    sols = puma_ik(robot, T)
+    sols = ik_all(robot, T)
     assert len(sols) == 8
     for s in sols:
         assert np.abs(robot.fk(s.q) - T).max() < 1e-10
@@ -472,7 +472,7 @@ def test_all_solutions_outside_limits_are_reported():
     joints[4] = replace(joints[4], limits=lim)
     robot = P260.with_(joints=tuple(joints))
     q = np.array([0.1, 0.2, -1.0, 0.3, 0.5, 0.4])
-    sols, reason = puma_ik_report(robot, robot.fk(q))
+    sols, reason = ik_report(robot, robot.fk(q))
     assert len(sols) == 8
     assert not any(s.within_limits or s.success for s in sols)
     assert "joint limits" in reason
@@ -480,8 +480,8 @@ def test_all_solutions_outside_limits_are_reported():
 
 
 # ---------------------------------------------------------------- the single-pose fast path
-# puma_ik_report works in Python floats: it wraps the joints itself (the same operations as
-# Robot.wrap_batch) and checks every answer with the Puma's FK written out in frame 0.
+# ik_report works in Python floats: it wraps the joints itself (the same operations as
+# Robot.wrap_batch) and checks every answer with the family's FK written out in floats.
 # These tests hold both against the robot's own numpy paths.
 TILTED_TOOL = P260.with_(
     name="puma260_tilted_tool",
@@ -511,8 +511,8 @@ def test_single_pose_path_agrees_with_the_batch_path_and_robot_fk(name, data):
     elif kind == "turns away":  # far outside the limits: every joint needs its own k
         turns = data.draw(st.lists(st.integers(-3, 3), min_size=6, max_size=6))
         q_current = q + TWO_PI * np.array(turns) + 0.3
-    sols, reason = puma_ik_report(robot, T, q_current)
-    Q, valid = puma_ik_batch(robot, T, q_current)
+    sols, reason = ik_report(robot, T, q_current)
+    Q, valid = ik_batch(robot, T, q_current)
     present = [c for c, row in zip(CONFIGS, Q[0], strict=True) if not np.isnan(row).any()]
     assert sorted(s.config for s in sols) == sorted(present)
     for s in sols:
@@ -523,7 +523,7 @@ def test_single_pose_path_agrees_with_the_batch_path_and_robot_fk(name, data):
         # the FK errors below); and a tie (an angle at +-pi, or half a turn from
         # q_current) may go either way
         tol = np.full(6, 1e-11)
-        tol[[3, 5]] += 1e-14 / max(abs(math.sin(s.q[4] + robot.joints[4].offset)), 1e-300)
+        tol[[3, 5]] += 1e-14 / max(abs(math.sin(s.q[4] + robot.joints[4].dh.offset)), 1e-300)
         assert (np.abs(wrapped(s.q - Q[0, k])) <= tol).all()
         toward = Q[0, k] if q_current is None else wrapped(Q[0, k] - q_current)
         tie = np.abs(np.abs(toward) - np.pi) < 1e-9
@@ -546,15 +546,15 @@ def test_frame0_fk_check_matches_robot_fk_for_arbitrary_q(name):
     # large) match the errors of Robot.fk, for robots with a base, a tool translation
     # and a tool rotation
     robot = FAST[name]
-    P = ik_closed._params(robot)
-    assert P.frame0
+    S = ik_closed._solver(robot)
+    assert S.floats
     rng = np.random.default_rng(17)
     for _ in range(20):
         T = robot.fk(rng.uniform(robot.lower, robot.upper))
         rows = rng.uniform(-7.0, 7.0, size=(8, 6))
         rows[1, :3] = rows[0, :3]  # a wrist twin: shares the arm terms
-        _, T6, tool_point = ik_closed._pose(robot, P, T)
-        got = ik_closed._fk_errors(P, rows.tolist(), T6, tool_point)
+        _, M = ik_closed._pose(robot, S, T)
+        got = S.errors(S.model, rows.tolist(), M, S.t_end)
         for q, (dp, dr) in zip(rows, got, strict=True):
             want_p, want_r = fk_errors_by_robot(robot, q, T)
             assert dp == pytest.approx(want_p, rel=1e-12, abs=1e-13)
@@ -567,9 +567,9 @@ def test_near_rigid_base_errors_come_from_the_robot_chain():
     base = spatial.translation(0.4, 0.2, 0.1) @ spatial.rot_z(0.3)
     base[0, 1] += 5e-11
     robot = P560.with_(name="near_rigid", base=base)
-    assert not ik_closed._params(robot).frame0
+    assert not ik_closed._solver(robot).floats
     T = robot.fk(robot.pose("qn"))
-    sols = puma_ik(robot, T)
+    sols = ik_all(robot, T)
     assert len(sols) == 8
     for s in sols:
         dp, dr = fk_errors_by_robot(robot, s.q, T)
@@ -587,11 +587,13 @@ EDGE_ANGLES = [0.0, -0.0, np.pi, -np.pi, np.nextafter(np.pi, 0), 2 * np.pi, -2 *
 def test_joint_rows_equal_wrap_batch_to_the_bit(robot, data):
     # the hand-written wrap of the single-pose path against Robot.wrap_batch, including
     # values exactly on the limits, at +-pi and half a turn from q_current (rint ties)
-    P = ik_closed._params(robot)
+    S = ik_closed._solver(robot)
+    signs, offs = np.array(S.signs), np.array(S.offs)
     edges = EDGE_ANGLES + robot.lower.tolist() + robot.upper.tolist()
     angle = st.one_of(st.floats(-13.0, 13.0), st.sampled_from(edges))
-    theta = np.array(data.draw(st.lists(angle, min_size=6, max_size=6))) + P.offset
-    Q = np.pi - np.mod(np.pi - (theta - P.offset), TWO_PI)  # wrapped to (-pi, pi]
+    q = np.array(data.draw(st.lists(angle, min_size=6, max_size=6)))
+    theta = signs * q - offs  # OPW angles whose joint values are q (to rounding)
+    Q = np.pi - np.mod(np.pi - signs * (theta + offs), TWO_PI)  # wrapped to (-pi, pi]
     near = None
     if data.draw(st.booleans()):
         near = np.array(data.draw(st.lists(angle, min_size=6, max_size=6)))
@@ -600,9 +602,7 @@ def test_joint_rows_equal_wrap_batch_to_the_bit(robot, data):
                 data.draw(st.lists(st.sampled_from([-1, 1]), min_size=6, max_size=6))
             )
     near_t = (None,) * 6 if near is None else tuple((near * (1.0 / TWO_PI)).tolist())
-    th = theta.tolist()
-    branch = (0, tuple(th[:3]), False, [tuple(th[3:])])
-    _, _, Qs, rows, flags = ik_closed._joint_rows(P, [branch], near_t, True)
+    Qs, rows, flags = ik_closed._rows(S, [(0, tuple(theta.tolist()), False)], near_t)
     W, ok = robot.wrap_batch(Q, near)
     assert Qs[0] == Q.tolist()
     assert rows[0] == (W if ok.all() else Q).tolist()

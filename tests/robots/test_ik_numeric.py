@@ -30,6 +30,7 @@ from workcell.robots import (
     puma260,
     puma560,
 )
+from workcell.robots.chain import joints_from_table
 
 TOL_P, TOL_O = 1e-6, 1e-6
 
@@ -51,10 +52,17 @@ def ur5_modified() -> Robot:
         (-90, 0, 0.0823),
     ]
     joints = tuple(
-        Joint(f"j{i + 1}", a=a, alpha=math.radians(al), d=d, limits=(-2 * math.pi, 2 * math.pi))
+        Joint.from_dh(
+            f"j{i + 1}",
+            a=a,
+            alpha=math.radians(al),
+            d=d,
+            convention="modified",
+            limits=(-2 * math.pi, 2 * math.pi),
+        )
         for i, (al, a, d) in enumerate(rows)
     )
-    return Robot("ur5_modified", joints, convention="modified")
+    return Robot("ur5_modified", joints)
 
 
 def ur5_standard() -> Robot:
@@ -67,7 +75,9 @@ def ur5_standard() -> Robot:
         (0.0823, 0, 0),
     ]
     joints = tuple(
-        Joint(f"j{i + 1}", a=a, alpha=math.radians(al), d=d, limits=(-2 * math.pi, 2 * math.pi))
+        Joint.from_dh(
+            f"j{i + 1}", a=a, alpha=math.radians(al), d=d, limits=(-2 * math.pi, 2 * math.pi)
+        )
         for i, (d, a, al) in enumerate(rows)
     )
     return Robot("ur5_standard", joints)
@@ -176,18 +186,18 @@ def test_newton_gauss_equations_and_jacobian():
 def test_position_gradient_and_hessian_match_finite_differences():
     """The closest-position objective's analytic gradient and exact Hessian (revolute and
     prismatic joints, both conventions) against central differences of robot.fk."""
-    prismatic_mix = (
-        Joint("a", a=0.1, alpha=0.3, d=0.2),
-        Joint("b", kind="prismatic", a=0.2, alpha=-1.0, theta=0.3, limits=(0.0, 1.0)),
-        Joint("c", a=0.3, alpha=1.2, d=0.1),
-        Joint("d", kind="prismatic", a=0.1, alpha=0.5, limits=(0.0, 1.0)),
-        Joint("e", a=0.2, alpha=0.7, d=0.1),
+    rows = (
+        dict(name="a", a=0.1, alpha=0.3, d=0.2),
+        dict(name="b", kind="prismatic", a=0.2, alpha=-1.0, theta=0.3, limits=(0.0, 1.0)),
+        dict(name="c", a=0.3, alpha=1.2, d=0.1),
+        dict(name="d", kind="prismatic", a=0.1, alpha=0.5, limits=(0.0, 1.0)),
+        dict(name="e", a=0.2, alpha=0.7, d=0.1),
     )
     robots = [
         robot_named("puma260"),
         robot_named("puma_placed"),
-        Robot("mixed_std", prismatic_mix),
-        Robot("mixed_mod", prismatic_mix, convention="modified"),
+        Robot("mixed_std", [Joint.from_dh(**r) for r in rows]),
+        Robot("mixed_mod", [Joint.from_dh(**r, convention="modified") for r in rows]),
     ]
     P = np.array([1.0, -0.5, 0.3])
 
@@ -225,8 +235,8 @@ def test_mink_reaches_random_full_range_targets(name):
         sol = ik_numeric.solve(r, T)
         assert_solution(r, sol, T)
         assert sol.method == "mink"
-        if r.family == "puma":
-            assert sol.config == ik_closed.puma_config(r, sol.q)
+        if r.ik_family is not None:
+            assert sol.config == ik_closed.config_of(r, sol.q)
 
 
 @given(q=st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6))
@@ -257,7 +267,7 @@ def test_config_selects_that_closed_form_solution(name):
     r = robot_named(name)
     _, Ts = random_targets(r, 8, 12)
     for T in Ts:
-        by_config = {s.config: s for s in ik_closed.puma_ik(r, T) if s.within_limits}
+        by_config = {s.config: s for s in ik_closed.ik_all(r, T) if s.within_limits}
         for config in ik_closed.CONFIGS:
             sol = r.ik(T, config=config)
             if config in by_config:
@@ -277,7 +287,7 @@ def test_config_without_closed_form_seeds(monkeypatch):
     _, Ts = random_targets(r, 10, 13)
     monkeypatch.setattr(ik_mink, "_closed_form_seeds", lambda *a: None)
     for T in Ts:
-        valid = {s.config: s for s in ik_closed.puma_ik(r, T) if s.within_limits}
+        valid = {s.config: s for s in ik_closed.ik_all(r, T) if s.within_limits}
         for config in ("run", "ldf"):
             sol = r.ik(T, config=config)
             assert sol.success == (config in valid), sol.reason
@@ -289,9 +299,14 @@ def test_config_without_closed_form_seeds(monkeypatch):
                 assert sol.reason
 
 
-def test_config_is_refused_for_non_puma_and_bad_letters():
-    with pytest.raises(KinematicsError, match="Puma family"):
-        robot_named("ur5_modified").ik(np.eye(4), config="lun")
+def test_config_is_refused_without_a_family_and_bad_letters():
+    # a Puma 560 whose wrist axes 4 and 5 miss each other by 5 cm: neither OPW nor UR
+    rows = [(0, 0.67183, 90, 0), (0.4318, 0, 0, 0), (0.0203, 0.15005, -90, 0)]
+    rows += [(0.05, 0.4318, 90, 0), (0, 0, -90, 0), (0, 0, 0, 0)]
+    bent = Robot("bent", joints_from_table(rows, [(-170, 170)] * 6))
+    assert bent.ik_family is None
+    with pytest.raises(KinematicsError, match="closed-form family"):
+        bent.ik(np.eye(4), config="lun")
     with pytest.raises(KinematicsError, match="three letters"):
         robot_named("puma560").ik(np.eye(4), config="lux")
 
@@ -303,7 +318,7 @@ def test_target_reachable_only_outside_the_limits_fails():
     cases = []
     for _ in range(500):  # 8 draws give 3 cases with this seed
         T = r.fk(rng.uniform(-math.pi, math.pi, 6))
-        sols = ik_closed.puma_ik(r, T)
+        sols = ik_closed.ik_all(r, T)
         if sols and not any(s.within_limits for s in sols):
             cases.append(T)
         if len(cases) == 3:
@@ -325,7 +340,7 @@ def test_target_reachable_only_outside_the_limits_fails():
 # Published DH lengths (m): (d1, a2, a3, d3, d4, tool offset along z6)
 _PUMA_DH = {
     "puma560": (0.67183, 0.4318, 0.0203, 0.15005, 0.4318, 0.0),
-    "puma260": (0.3302, 0.199034, 0.0, 0.12446, 0.2032, 0.05588),
+    "puma260": (0.3302, 0.0254 * math.hypot(7.8, 0.75), 0.0, 0.12446, 0.2032, 0.05588),
 }
 
 
@@ -393,7 +408,7 @@ def test_newton_gauss_config():
     r = robot_named("puma260")
     _, Ts = random_targets(r, 5, 22)
     for T in Ts:
-        valid = {s.config for s in ik_closed.puma_ik(r, T) if s.within_limits}
+        valid = {s.config for s in ik_closed.ik_all(r, T) if s.within_limits}
         for config in sorted(valid)[:2]:
             sol = r.ik(T, method="newton-gauss", config=config)
             if sol.success:

@@ -17,13 +17,14 @@ import mujoco
 import numpy as np
 import pytest
 import trimesh
+from scipy.spatial import Delaunay
 
 from workcell import solids, spatial
 from workcell.errors import ModelError
+from workcell.meshgeoms import convex_pieces
 from workcell.modeller.model import Model
 from workcell.robots import Joint, LinkGeometry, Robot, puma260, puma560
 from workcell.robots.gripper import attach_gripper, parallel_gripper
-from workcell.robots.meshes import convex_pieces
 from workcell.robots.mjcf import (
     ARM_DENSITY,
     body_name,
@@ -230,15 +231,22 @@ def two_link_robot():
         LinkGeometry(2, "cube", spatial.translation(-0.1, 0, 0) @ spatial.scaling(2.0, 1.0, 0.5)),
         LinkGeometry(2, "cube", spatial.translation(0.1, 0, 0) @ spatial.scaling(-1.0, 1.0, 1.0)),
     )
-    return Robot("two", (Joint("a", a=0.3), Joint("b", a=0.2)), model=m, geometry=geo)
+    return Robot(
+        "two", (Joint.from_dh("a", a=0.3), Joint.from_dh("b", a=0.2)), model=m, geometry=geo
+    )
 
 
 def test_convex_pieces_rule():
     robot = two_link_robot()
     pieces, convex = convex_pieces(robot.model, "ring")
-    assert not convex  # the hull of the whole torus
-    assert len(pieces) == 1
-    assert pieces[0].volume > trimesh_of(robot, "ring").volume
+    assert not convex  # CoACD's pieces: the hole stays open
+    ring = trimesh_of(robot, "ring")
+    assert len(pieces) > 4
+    assert (
+        ring.volume <= sum(p.volume for p in pieces) < 1.1 * ring.volume < ring.convex_hull.volume
+    )
+    centre = np.zeros((1, 3))  # the torus's centre, in the hole: in no piece
+    assert all(Delaunay(p.vertices).find_simplex(centre)[0] < 0 for p in pieces)
     pieces, convex = convex_pieces(robot.model, "tee")
     assert not convex  # the union's two boxes
     assert len(pieces) == 2
@@ -256,10 +264,11 @@ def test_non_convex_and_scaled_solids_keep_exact_mass():
     assert M.body_mass[body_id(M, "link1")] == pytest.approx(1000 * (ring + tee), rel=1e-6)
     # scaled by det 1 and mirrored (det -1, turned inside out unless re-wound): 2 cubes
     assert M.body_mass[body_id(M, "link2")] == pytest.approx(1000 * 2 * 0.05**3, rel=1e-6)
-    # the tee collides as its two boxes, the torus as its hull, each placed cube as itself
+    # the tee collides as its two boxes, the torus as CoACD's pieces, each placed cube as itself
     col_bodies = M.geom_bodyid[M.geom_group == 3].tolist()
     link1, link2 = body_id(M, "link1"), body_id(M, "link2")
-    assert (col_bodies.count(link1), col_bodies.count(link2)) == (3, 2)
+    ring_pieces = len(convex_pieces(robot.model, "ring")[0])
+    assert (col_bodies.count(link1), col_bodies.count(link2)) == (2 + ring_pieces, 2)
     rng = np.random.default_rng(2)
     for _ in range(10):
         q = rng.uniform(robot.lower, robot.upper)

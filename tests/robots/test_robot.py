@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import mujoco
 import numpy as np
 import pytest
@@ -14,6 +16,8 @@ from workcell.robots import Joint, Robot, puma260, puma560
 from workcell.robots.mjcf import kinematic_model
 
 P560 = puma560(geometry=False)
+A2_260 = 0.0254 * np.hypot(7.8, 0.75)  # DESIGN.md: exact a2 (m) and offset delta (deg)
+DELTA_260 = np.degrees(np.arctan2(0.75, 7.8))
 P260 = puma260(geometry=False)
 
 
@@ -23,8 +27,9 @@ def thesis_fk(robot, q):
     a_i = (a c th, a s th, b). Standard DH, revolute joints; base and tool applied outside."""
     Q, r = np.eye(3), np.zeros(3)
     for j, qi in zip(robot.joints, q, strict=True):
-        th, al = qi + j.offset, j.alpha
-        ai = np.array([j.a * np.cos(th), j.a * np.sin(th), j.d])
+        row = j.dh
+        th, al = qi + row.offset, row.alpha
+        ai = np.array([row.a * np.cos(th), row.a * np.sin(th), row.d])
         r = r + Q @ ai
         Q = Q @ np.array(
             [
@@ -54,16 +59,13 @@ def test_puma560_named_poses_match_published_values():
 
 
 def test_puma260_zero_pose_by_hand():
-    # q = 0: theta2 = -5.4923 deg, theta3 = +5.4923 deg: the elbow drop cancels, forearm and
-    # flange point up from the elbow; the elbow lies a2 along the dropped upper arm
-    off = np.radians(5.4923)
+    # q = 0: theta2 = -delta, theta3 = +delta: the elbow drop cancels, forearm and flange
+    # point up from the elbow; the elbow lies 7.8 in forward and 0.75 in below the shoulder
     T = P260.fk(np.zeros(6))
-    elbow = np.array([0.199034 * np.cos(off), 0.0, 0.3302 - 0.199034 * np.sin(off)])
+    elbow = 0.0254 * np.array([7.8, 0.0, 0.3302 / 0.0254 - 0.75])
     expected = elbow + np.array([0.0, -0.12446, 0.2032 + 0.05588])
     np.testing.assert_allclose(T[:3, 3], expected, atol=1e-12)
     np.testing.assert_allclose(T[:3, :3], np.eye(3), atol=1e-12)
-    # and the elbow drop itself: 0.199034 * sin(5.4923 deg) = 0.75 in
-    assert 0.199034 * np.sin(off) == pytest.approx(0.75 * 0.0254, rel=2e-4)
 
 
 @given(st.integers(0, 2**32 - 1))
@@ -97,11 +99,13 @@ def _site_pose(m, d, q):
     return T
 
 
-MIXED = [
-    Joint("a", a=0.1, alpha=0.3, d=0.2, offset=0.1),
-    Joint("b", kind="prismatic", a=0.2, alpha=-0.5, theta=0.4, offset=0.05, limits=(0.0, 0.5)),
-    Joint("c", a=0.3, alpha=1.0, d=0.1, limits=(-2.0, 2.0)),
+MIXED_ROWS = [
+    dict(name="a", a=0.1, alpha=0.3, d=0.2, offset=0.1),
+    dict(name="b", kind="prismatic", a=0.2, alpha=-0.5, theta=0.4, offset=0.05, limits=(0.0, 0.5)),
+    dict(name="c", a=0.3, alpha=1.0, d=0.1, limits=(-2.0, 2.0)),
 ]
+MIXED = [Joint.from_dh(**row) for row in MIXED_ROWS]
+MIXED_MOD = [Joint.from_dh(**row, convention="modified") for row in MIXED_ROWS]
 
 
 @pytest.mark.parametrize(
@@ -111,7 +115,7 @@ MIXED = [
         P260,
         P560.with_(base=spatial.euler([0.1, 0.2, 0.3], translation=(1, 2, 3))),
         Robot("mixed_std", MIXED, tool=spatial.translation(0, 0.1, 0.2)),
-        Robot("mixed_mod", MIXED, convention="modified", tool=spatial.translation(0, 0, 0.1)),
+        Robot("mixed_mod", MIXED_MOD, tool=spatial.translation(0, 0, 0.1)),
     ],
     ids=lambda r: r.name,
 )
@@ -126,10 +130,11 @@ def test_mujoco_model_agrees_with_numpy_fk(robot):
 
 def test_modified_dh_is_craig_convention():
     # Craig: T_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i), written out here
-    r = Robot("mod", MIXED, convention="modified")
+    r = Robot("mod", MIXED_MOD)
     q = np.array([0.3, 0.2, -0.7])
     T = np.eye(4)
-    for j, qi in zip(MIXED, q, strict=True):
+    for row, qi in zip(MIXED_ROWS, q, strict=True):
+        j = SimpleNamespace(**{"theta": 0.0, "offset": 0.0, "d": 0.0, "kind": "revolute", **row})
         th = j.theta if j.kind == "prismatic" else qi + j.offset
         dd = qi + j.offset if j.kind == "prismatic" else j.d
         T = T @ spatial.rot_x(j.alpha) @ spatial.translation(j.a, 0, 0)
@@ -137,7 +142,7 @@ def test_modified_dh_is_craig_convention():
     np.testing.assert_allclose(r.fk(q), T, atol=1e-14)
 
 
-@pytest.mark.parametrize("robot", [P560, Robot("mixed_mod", MIXED, convention="modified")], ids=str)
+@pytest.mark.parametrize("robot", [P560, Robot("mixed_mod", MIXED_MOD)], ids=str)
 def test_jacobian_matches_finite_differences(robot):
     rng = np.random.default_rng(11)
     for _ in range(10):
@@ -208,17 +213,17 @@ def test_puma_tables_as_designed():
     ]
     rows260 = [
         (0, 0.3302, 90, 0),
-        (0.199034, 0, 0, -5.4923),
-        (0, 0.12446, -90, 5.4923),
+        (A2_260, 0, 0, -DELTA_260),
+        (0, 0.12446, -90, DELTA_260),
         (0, 0.2032, 90, 0),
         (0, 0, -90, 0),
         (0, 0, 0, 0),
     ]
     for robot, rows in ((P560, rows560), (P260, rows260)):
         for j, (a, d, al, off) in zip(robot.joints, rows, strict=True):
-            assert (j.a, j.d) == (a, d)
-            assert np.degrees(j.alpha) == pytest.approx(al)
-            assert np.degrees(j.offset) == pytest.approx(off)
+            assert (j.dh.a, j.dh.d) == (a, d)
+            assert np.degrees(j.dh.alpha) == pytest.approx(al)
+            assert np.degrees(j.dh.offset) == pytest.approx(off, abs=1e-12)
     np.testing.assert_allclose(P260.tool, spatial.translation(0, 0, 0.05588))
     np.testing.assert_allclose(np.degrees(P260.max_speeds), [119, 119, 164, 577, 431, 397])
     np.testing.assert_allclose(np.degrees(P260.pose("home")), [0, 0, -90, 0, 90, 0])

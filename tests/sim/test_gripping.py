@@ -252,3 +252,44 @@ def test_a_held_part_does_not_collide_with_its_gripper_but_with_the_rest():
     hits = [e.detail for e in sim.events if e.kind == "collision"]
     assert any("cube with table" in h or "table with cube" in h for h in hits)
     assert not any("gripper" in h and "cube" in h for h in hits)
+
+
+def _overlap(sim: Simulator, frame: int, a: str, b: str) -> float:
+    """The deepest overlap (m, > 0) between things ``a`` and ``b`` (a part: its geoms
+    ``a.*``; a link: the geoms of body ``a``) in timeline ``frame``, from MuJoCo's contacts
+    on a fresh MjData."""
+    m, d = sim.model, mujoco.MjData(sim.model)
+    d.qpos[:] = sim.timeline.frame(frame)[2]
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_collision(m, d)
+
+    def of(geom: int, thing: str) -> bool:
+        return (
+            m.geom(geom).name.startswith(thing + ".") or m.body(m.geom_bodyid[geom]).name == thing
+        )
+
+    depths = [
+        -c.dist
+        for c in d.contact[: d.ncon]
+        if (of(c.geom1, a) and of(c.geom2, b)) or (of(c.geom1, b) and of(c.geom2, a))
+    ]
+    return max(depths, default=0.0)
+
+
+def test_a_collision_event_carries_the_colliding_frame():
+    """render_frame(sim, event.frame) must show the collision: the pair overlaps in that
+    frame, and did not in the frame before; the frame's time is the event's."""
+    cell = crash_cell()
+    sim = Simulator(cell, dt=0.005)
+    sim.move_joints_relative("r", np.radians([60, 0, 0, 0, 0, 0]))
+    hits = [e for e in sim.events if e.kind == "collision" and "post" in e.detail]
+    assert hits
+    tol = 1e-4  # the contact tolerance (m)
+    for e in hits:
+        a, b = e.detail.split(":")[0].split(" with ")
+        assert 0 < e.frame < sim.frames
+        assert sim.timeline.frame(e.frame)[0] == pytest.approx(e.t, abs=1e-12)
+        assert _overlap(sim, e.frame, a, b) > tol, e
+        assert _overlap(sim, e.frame - 1, a, b) <= tol, e
+    move = next(e for e in sim.events if e.kind == "move")
+    assert hits[0].frame < move.frame  # during the move, not at its start or end

@@ -11,7 +11,7 @@ import pytest
 
 from workcell import KinematicsError, ProgramError, UnreachableError, compile_cell
 from workcell.examples import thesis_pick_place as ex
-from workcell.robots.ik_closed import puma_config
+from workcell.robots.ik_closed import config_of as puma_config
 from workcell.sim import Simulator
 from workcell.sim.grasp import tool_down
 from workcell.spatial import angle_between, rot_x, translation

@@ -5,7 +5,8 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
 - ``ground``: a plane at z = 0;
 - static part ``P``: geoms of the worldbody at the part's pose: ``P.visual`` (the exact
   mesh, ``inertia="exact"``, no contacts, group 2) and ``P.col{i}`` (convex collision
-  pieces, group 3; see :func:`workcell.robots.meshes.convex_pieces`);
+  pieces, group 3; see :func:`workcell.meshgeoms.collision_pieces`: a convex part is its
+  own piece, a non-convex one is split by CoACD within the error bound ``concavity``);
 - movable part ``P``: a body ``P`` at its pose with a free joint ``P.free``, one visual
   mesh geom ``P.visual`` carrying the mass (exact inertia at the part's density) and
   collision geoms ``P.col{i}`` with density 0;
@@ -22,15 +23,15 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
   :mod:`workcell.robots.mjcf`), ``timestep`` (s), the ``implicitfast`` integrator (it
   integrates the servos' damping implicitly, stable at the default timestep) and stiff
   contacts (every collision geom, the ground included, has ``solref`` =
-  :data:`~workcell.robots.mjcf.CONTACT_SOLREF` and ``solimp`` =
-  :data:`~workcell.robots.mjcf.CONTACT_SOLIMP`: with MuJoCo's default contacts a resting
+  :data:`~workcell.meshgeoms.CONTACT_SOLREF` and ``solimp`` =
+  :data:`~workcell.meshgeoms.CONTACT_SOLIMP`: with MuJoCo's default contacts a resting
   part sinks ~0.2 mm and a faceted one creeps ~0.2 mm/s; these give ~0.002 mm and none),
   so the exported file plays in MuJoCo's viewer with its actuators; the keyframe
   ``initial`` holds every actuator at its joint's initial value (load it in the viewer, or
   ``mj_resetDataKeyframe``, before playing: ctrl 0 would drive the arms to q = 0).
 
 Initial joint values live in ``qpos0`` through each joint's ``ref``: the link bodies are
-written at their pose for the initial q (body frame ``placement @ Rz(q0)``) and
+written at their pose for the initial q (body frame ``origin @ M(q0)``, the joint's motion) and
 ``ref = q0``, so MuJoCo's joint value is the robot's joint value (``qpos = q`` gives
 ``fk(q)``) and ``qpos0``, the XML's default pose and ``mj_resetData`` are the initial
 configuration. The exported XML contains no ``<frame>`` element (dm_control 1.0.50's
@@ -46,19 +47,23 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
-import trimesh
 
 from workcell.cell.workcell import Workcell
 from workcell.checks import is_finite_number
+from workcell.decompose import DEFAULT_CONCAVITY
 from workcell.errors import GeometryError
 from workcell.files import atomic_write_bytes, atomic_write_text
-from workcell.modeller.model import Model
-from workcell.robots.meshes import convex_pieces, is_convex, stl_bytes
-from workcell.robots.mjcf import (
+from workcell.meshgeoms import (
     CONTACT_SOLIMP,
     CONTACT_SOLREF,
     MESHDIR,
+    MeshAssets,
     add_mesh_geoms,
+    collision_meshes,
+    collision_pieces,
+)
+from workcell.modeller.model import Model
+from workcell.robots.mjcf import (
     body_name,
     finger_joint_names,
     gripper_body_name,
@@ -66,7 +71,7 @@ from workcell.robots.mjcf import (
     robot_spec,
     spec_to_xml,
 )
-from workcell.spatial import pose_from_pos_quat, quat_from_matrix, rot_z, translation
+from workcell.spatial import pose_from_pos_quat, quat_from_matrix
 
 __all__ = [
     "DEFAULT_TIMESTEP",
@@ -85,8 +90,6 @@ DEFAULT_TIMESTEP = 0.002  # s: MuJoCo's default; the grasp weld's solref needs <
 GRASP_SOLREF = (0.004, 1.0)
 # anchor (3) | relpos (3) | relquat wxyz (4) | torquescale | flag (0: relpose given)
 WELD_DATA = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
-_EXACT = mujoco.mjtMeshInertia.mjMESH_INERTIA_EXACT
-_MESH = mujoco.mjtGeom.mjGEOM_MESH
 
 
 @dataclass
@@ -122,25 +125,7 @@ def _pos_quat(T: np.ndarray) -> tuple[list[float], list[float]]:
     return T[:3, 3].tolist(), quat_from_matrix(T[:3, :3]).tolist()
 
 
-def _pieces(model: Model, ref: tuple[str, str]) -> tuple[list[trimesh.Trimesh], bool]:
-    """Convex collision pieces of a block or object in its own frame, and whether it is convex."""
-    level, name = ref
-    if level == "block":
-        return convex_pieces(model, name)
-    mesh = model.world_mesh(ref)
-    if is_convex(mesh):
-        return [mesh], True
-    out: list[trimesh.Trimesh] = []
-    for rel in model.relations(ref):
-        if rel.target_level not in ("block", "object"):
-            return [mesh.convex_hull], False
-        sub, _ = _pieces(model, (rel.target_level, rel.target))
-        out.extend(p.copy().apply_transform(rel.transform) for p in sub)
-    return (out or [mesh.convex_hull]), False
-
-
 def _add_part_geoms(
-    spec: mujoco.MjSpec,
     parent: mujoco.MjsBody,
     model: Model,
     name: str,
@@ -148,7 +133,8 @@ def _add_part_geoms(
     colour: tuple[float, ...],
     pose: np.ndarray,
     density: float,
-    assets: dict[str, bytes],
+    reg: MeshAssets,
+    concavity: float,
 ) -> None:
     """Mesh assets of a part, its visual (mass-carrying) geoms and collision geoms in ``parent``.
 
@@ -160,22 +146,13 @@ def _add_part_geoms(
         visuals = [(f"{name}.mesh{k}", f"{name}.visual{k}", p.mesh) for k, p in enumerate(parts)]
     else:
         visuals = [(f"{name}.mesh", f"{name}.visual", model.world_mesh(entity))]
-    for vis, _, mesh in visuals:
-        assets[f"{vis}.stl"] = stl_bytes(mesh)
-        spec.add_mesh(name=vis, file=f"{vis}.stl", inertia=_EXACT)
-    pieces, convex = _pieces(model, entity)
-    cols = [v[0] for v in visuals]
-    if not convex:
-        cols = []
-        for i, p in enumerate(pieces):
-            mname = f"{name}.hull{i}"
-            assets[f"{mname}.stl"] = stl_bytes(p)
-            spec.add_mesh(name=mname, file=f"{mname}.stl", inertia=_EXACT)
-            cols.append(mname)
+    meshes = [reg.add(vis, mesh) for vis, _, mesh in visuals]
+    col = collision_pieces(model, entity, concavity)
+    cols = meshes if col.convex else collision_meshes(reg, name, col.pieces, False, meshes[0])
     pos, quat = _pos_quat(pose)
     add_mesh_geoms(
         parent,
-        [(geom, vis) for vis, geom, _ in visuals],
+        [(geom, mesh) for (_, geom, _), mesh in zip(visuals, meshes, strict=True)],
         cols,
         collision_prefix=name,
         pos=pos,
@@ -189,13 +166,12 @@ def _set_initial_q(child: mujoco.MjSpec, robot, q: np.ndarray) -> None:  # noqa:
     """Write the link bodies at q and set each joint's ``ref`` to q (so qpos0 = q)."""
     for i, jt in enumerate(robot.joints):
         body = child.body(body_name("", i + 1))
-        T = pose_from_pos_quat(body.pos, body.quat)
-        T = T @ translation(0, 0, float(q[i])) if jt.kind == "prismatic" else T @ rot_z(float(q[i]))
+        T = pose_from_pos_quat(body.pos, body.quat) @ jt.motion(float(q[i]))
         body.pos, body.quat = _pos_quat(T)
         child.joint(joint_name(robot, "", i)).ref = float(q[i])
 
 
-def _build(cell: Workcell, timestep: float) -> CompiledCell:
+def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
     if not (is_finite_number(timestep) and timestep > 0):
         raise GeometryError(f"timestep must be a finite number of seconds > 0, got {timestep!r}")
     spec = mujoco.MjSpec()
@@ -204,7 +180,8 @@ def _build(cell: Workcell, timestep: float) -> CompiledCell:
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.compiler.meshdir = MESHDIR
     spec.modelname = cell.name
-    assets: dict[str, bytes] = {}
+    reg = MeshAssets(spec)
+    assets = reg.assets
     out = CompiledCell(spec=spec, model=None)  # type: ignore[arg-type]
     spec.worldbody.add_geom(
         name=GROUND,
@@ -217,12 +194,14 @@ def _build(cell: Workcell, timestep: float) -> CompiledCell:
     spec.worldbody.add_light(name="light", pos=[0, 0, 3], dir=[0, 0, -1])
     m = cell.model
     for p in cell.static_parts.values():
-        _add_part_geoms(spec, spec.worldbody, m, p.name, p.entity, p.colour, p.pose, 1000.0, assets)
+        _add_part_geoms(
+            spec.worldbody, m, p.name, p.entity, p.colour, p.pose, 1000.0, reg, concavity
+        )
     for p in cell.movable_parts.values():
         body = spec.worldbody.add_body(name=p.name)
         body.pos, body.quat = _pos_quat(p.pose)
         body.add_freejoint(name=f"{p.name}.free")
-        _add_part_geoms(spec, body, m, p.name, p.entity, p.colour, np.eye(4), p.density, assets)
+        _add_part_geoms(body, m, p.name, p.entity, p.colour, np.eye(4), p.density, reg, concavity)
         out.part_bodies[p.name] = p.name
         out.free_joints[p.name] = f"{p.name}.free"
     for r in cell.robots.values():
@@ -274,13 +253,20 @@ def _build(cell: Workcell, timestep: float) -> CompiledCell:
     return out
 
 
-def compile_cell(cell: Workcell, *, timestep: float = DEFAULT_TIMESTEP) -> CompiledCell:
+def compile_cell(
+    cell: Workcell,
+    *,
+    timestep: float = DEFAULT_TIMESTEP,
+    concavity: float = DEFAULT_CONCAVITY,
+) -> CompiledCell:
     """Build the cell's MjSpec and compile it (a MuJoCo error raises GeometryError).
 
     ``timestep`` (s): the physics timestep written into the model (the kinematic
-    simulator does not use it).
+    simulator does not use it). ``concavity``: the error bound of the convex
+    decomposition of non-convex parts (CoACD's threshold, in (0, 1]; see
+    :mod:`workcell.decompose`).
     """
-    out = _build(cell, timestep)
+    out = _build(cell, timestep, concavity)
     try:
         out.model = m = out.spec.compile()
     except ValueError as exc:
@@ -298,15 +284,16 @@ def export_cell(
     *,
     file_name: str | None = None,
     timestep: float = DEFAULT_TIMESTEP,
+    concavity: float = DEFAULT_CONCAVITY,
 ) -> Path:
     """Write the cell as one MJCF file plus STL meshes in ``out_dir/meshes``; return the XML path.
 
     The XML (default ``"{cell.name}.xml"``) names its meshes relative to itself, so the
     folder loads from any working directory, in plain MuJoCo and dm_control. The cell is
-    compiled (with the physics ``timestep``, s) before anything is written; every file is
-    written atomically.
+    compiled (with the physics ``timestep``, s, and the decomposition bound ``concavity``)
+    before anything is written; every file is written atomically.
     """
-    compiled = compile_cell(cell, timestep=timestep)
+    compiled = compile_cell(cell, timestep=timestep, concavity=concavity)
     try:
         xml = spec_to_xml(compiled.spec)
     except ValueError as exc:

@@ -34,8 +34,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, ModelError, WorkcellError
-from workcell.files import atomic_write_text
-from workcell.modeller.model import Model, check_colour
+from workcell.files import atomic_write_text, load_json
+from workcell.modeller.model import MAX_NAME_LENGTH, Model, check_colour
 from workcell.robots import attach_gripper, parallel_gripper, puma260, puma560
 from workcell.robots.robot import Robot
 from workcell.spatial import as_transform, translation
@@ -69,7 +69,7 @@ GRIPPER_PARAMETERS = (
     "palm_height",
     "tcp_depth",
 )
-_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_\-]*$")
+_NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_\-]*")
 _ENTITY_LEVELS = ("block", "object")
 
 Array = NDArray[np.float64]
@@ -77,10 +77,11 @@ Array = NDArray[np.float64]
 
 def check_cell_name(name: object, kind: str = "item") -> str:
     """Return ``name`` if it is a valid (MJCF-safe) cell name, else raise ModelError."""
-    if not isinstance(name, str) or not _NAME_RE.match(name):
+    if not isinstance(name, str) or len(name) > MAX_NAME_LENGTH or not _NAME_RE.fullmatch(name):
+        shown = repr(name) if len(repr(name)) <= 60 else repr(name)[:57] + "..."
         raise ModelError(
-            f"invalid {kind} name {name!r}: use a letter or '_' followed by letters, digits, "
-            "'_' or '-' (no '.', no '/')"
+            f"invalid {kind} name {shown}: use a letter or '_' followed by letters, digits, "
+            f"'_' or '-' (no '.', no '/'), at most {MAX_NAME_LENGTH} characters"
         )
     return name
 
@@ -506,12 +507,21 @@ class Workcell:
         if not isinstance(data, dict):
             raise fail("top level", "expected a JSON object")
         if data.get("format") != FORMAT:
-            raise fail("format", f"expected {FORMAT!r}, got {data.get('format')!r}")
-        if data.get("version") != VERSION:
-            raise fail("version", f"supported: {VERSION}, got {data.get('version')!r}")
+            # never quote the field: the file may be anything (a server reads files by name)
+            hint = (
+                " (a model file: load it as a model)"
+                if data.get("format") == "workcell-model"
+                else ""
+            )
+            raise fail("format", f"not a {FORMAT} document (missing or wrong 'format'){hint}")
+        version = data.get("version")
+        if type(version) is not int or version != VERSION:
+            small = isinstance(version, (int, float)) and abs(version) < 10**9
+            shown = repr(version) if version is None or small else f"(a {type(version).__name__})"
+            raise fail("version", f"supported: {VERSION}, got {shown}")
         try:
             model = Model.from_dict(data["model"])
-        except (WorkcellError, KeyError, TypeError, ValueError) as exc:
+        except (WorkcellError, KeyError, TypeError, ValueError, OverflowError) as exc:
             raise fail("model", exc) from exc
         try:
             cell = cls(data.get("name", "workcell"), model)
@@ -551,33 +561,33 @@ class Workcell:
                 raise fail(key, "expected a list")
             for i, e in enumerate(entries):
                 where = f"{key}[{i}]"
-                if isinstance(e, dict) and isinstance(e.get("name"), str):
-                    where += f" ('{e['name']}')"
+                name = e.get("name") if isinstance(e, dict) else None
+                if (
+                    isinstance(name, str)
+                    and len(name) <= MAX_NAME_LENGTH
+                    and _NAME_RE.fullmatch(name)
+                ):
+                    where += f" ('{name}')"
                 try:
                     if not isinstance(e, dict):
                         raise ModelError("expected a JSON object")
                     add(e)
                 except KeyError as exc:
                     raise fail(where, f"missing field {exc}") from exc
-                except (WorkcellError, TypeError, ValueError) as exc:
+                except (WorkcellError, TypeError, ValueError, OverflowError) as exc:
                     raise fail(where, exc) from exc
         return cell
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write the cell as versioned JSON, atomically."""
+        """Write the cell as versioned JSON, atomically; a failed write raises ModelError."""
         text = json.dumps(self.to_dict(), allow_nan=False)
-        atomic_write_text(path, text)
+        atomic_write_text(path, text, error=ModelError)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> Workcell:
-        """Read a cell saved by :meth:`save`; a damaged file raises ModelError naming the place."""
-        try:
-            with open(path, encoding="utf-8") as f:
-                data = json.load(f)
-        except OSError as exc:
-            raise ModelError(f"cannot read cell file '{path}': {exc}") from exc
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise ModelError(f"cell file '{path}' is not valid JSON: {exc}") from exc
+        """Read a cell saved by :meth:`save`; a damaged file raises ModelError naming the
+        place (never quoting a file that is not a cell file)."""
+        data = load_json(path, what="cell file", error=ModelError)
         return cls.from_dict(data, source=f"cell file '{path}'")
 
     def __eq__(self, other: object) -> bool:

@@ -43,7 +43,7 @@ if TYPE_CHECKING:
     from workcell.modeller.meshprops import MassProperties, ValidityReport
     from workcell.modeller.world import WorldPart
 
-__all__ = ["BOOLEAN_OPS", "LEVELS", "EntityInfo", "Model", "Ref", "Relation"]
+__all__ = ["BOOLEAN_OPS", "LEVELS", "MAX_NAME_LENGTH", "EntityInfo", "Model", "Ref", "Relation"]
 
 LEVELS = ("surface", "block", "object", "scene")
 CHILD = {"block": "surface", "object": "block", "scene": "object"}
@@ -54,7 +54,8 @@ RELATION_KIND = {
 }
 _PREFIX = {"block": "ts", "object": "tb", "scene": "to"}
 BOOLEAN_OPS = ("union", "difference", "intersection")
-_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-]*$")
+_NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
+MAX_NAME_LENGTH = 128  # characters of an entity or relation name
 
 Ref = str | tuple[str, str]
 
@@ -188,10 +189,16 @@ class _Entity:
 
 
 def check_name(name: object) -> str:
-    """Return ``name`` if it is a valid entity or relation name, else raise ModelError."""
-    if not isinstance(name, str) or not _NAME_RE.match(name):
+    """Return ``name`` if it is a valid entity or relation name, else raise ModelError.
+
+    A name is a letter or '_' followed by letters, digits, '_', '.' or '-' (ASCII, so
+    printable), at most :data:`MAX_NAME_LENGTH` (128) characters.
+    """
+    if not isinstance(name, str) or len(name) > MAX_NAME_LENGTH or not _NAME_RE.fullmatch(name):
+        shown = repr(name) if len(repr(name)) <= 60 else repr(name)[:57] + "..."
         raise ModelError(
-            f"invalid name {name!r}: use a letter or '_' followed by letters, digits, '_', '.' or '-'"
+            f"invalid name {shown}: use a letter or '_' followed by letters, digits, '_', '.' "
+            f"or '-', at most {MAX_NAME_LENGTH} characters"
         )
     return name
 

@@ -22,14 +22,13 @@ from __future__ import annotations
 
 import json
 import os
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from workcell.errors import GeometryError, ModelError
-from workcell.files import atomic_write_text
-from workcell.modeller.model import BOOLEAN_OPS, CHILD, LEVELS, Model
+from workcell.files import atomic_write_text, load_json
+from workcell.modeller.model import BOOLEAN_OPS, CHILD, LEVELS, Model, check_name
 from workcell.modeller.surface import Surface
 
 __all__ = [
@@ -43,6 +42,7 @@ __all__ = [
 
 FORMAT = "workcell-model"
 VERSION = 1
+_MAX_SERIAL = 10**9  # relation names are generated from it (ts1, ts2, ...)
 _SECTIONS = {"surface": "surfaces", "block": "blocks", "object": "objects", "scene": "scenes"}
 
 
@@ -87,17 +87,21 @@ def model_from_dict(data: Any) -> Model:
     """Build a new model from :func:`model_to_dict` data, validating every part first."""
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise ModelError(f"not a {FORMAT} document (missing or wrong 'format')")
-    if type(data.get("version")) is not int or data.get("version") != VERSION:
-        raise ModelError(
-            f"unsupported {FORMAT} version {data.get('version')!r}; this build reads {VERSION}"
-        )
+    version = data.get("version")
+    if type(version) is not int or version != VERSION:
+        small = isinstance(version, (int, float)) and abs(version) < 10**9
+        shown = repr(version) if version is None or small else f"(a {type(version).__name__})"
+        raise ModelError(f"unsupported {FORMAT} version {shown}; this build reads {VERSION}")
     m = Model()
     sections = {lv: _field(data, key, "document", list) for lv, key in _SECTIONS.items()}
     # pass 1: every entity, so relations may point in any order within a level
     for level in LEVELS:
         for i, d in enumerate(sections[level]):
             where = f"{_SECTIONS[level]}[{i}]"
-            name = _field(d, "name", where, str)
+            try:
+                name = check_name(_field(d, "name", where, str))
+            except ModelError as exc:
+                raise ModelError(f"{where}: {exc}") from None
             where = f"{where} '{name}'"
             try:
                 colour = d.get("colour") if isinstance(d, dict) else None
@@ -127,8 +131,8 @@ def model_from_dict(data: Any) -> Model:
             where = f"{_SECTIONS[level]}[{i}] '{d['name']}'"
             rels = _field(d, "relations", where, list)
             serial = _field(d, "serial", where, int)
-            if serial < 0:
-                raise ModelError(f"{where}: field 'serial' must be >= 0, got {serial}")
+            if not 0 <= serial <= _MAX_SERIAL:
+                raise ModelError(f"{where}: field 'serial' must be in 0 .. {_MAX_SERIAL}")
             e = m._levels[level][d["name"]]
             if rels:
                 names, targets, Ts = [], [], []
@@ -153,26 +157,13 @@ def model_from_dict(data: Any) -> Model:
 def save(model: Model, path: str | os.PathLike) -> None:
     """Write ``model`` to ``path`` as JSON, atomically; a failed write raises ModelError."""
     text = json.dumps(model_to_dict(model), separators=(",", ":"))
-    try:
-        atomic_write_text(path, text)
-    except OSError as exc:
-        raise ModelError(f"cannot write model file '{path}': {exc.strerror or exc}") from exc
+    atomic_write_text(path, text, error=ModelError)
 
 
 def load(path: str | os.PathLike) -> Model:
-    """Read a model from ``path``; any fault raises ModelError naming the place."""
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError(f"cannot read model file '{path}': {exc.strerror}") from exc
-    except UnicodeDecodeError as exc:
-        raise ModelError(f"model file '{path}' is not UTF-8 text") from exc
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ModelError(
-            f"model file '{path}' is not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})"
-        ) from exc
+    """Read a model from ``path``; any fault raises ModelError naming the place (never
+    quoting a file that is not a model file); a file over ``max_file_bytes`` LimitError."""
+    data = load_json(path, what="model file", error=ModelError)
     try:
         return model_from_dict(data)
     except ModelError as exc:

@@ -28,6 +28,7 @@ __all__ = [
     "choice",
     "colour",
     "count",
+    "file_name",
     "label",
     "list_of",
     "matrix",
@@ -70,6 +71,14 @@ def text(v: object, what: str) -> str:
     """Any string (a file path, a free text)."""
     if not isinstance(v, str):
         raise ProgramError(f"{what} must be a string, got {_show(v)}")
+    return v
+
+
+def file_name(v: object, what: str) -> str:
+    """A file name: a non-empty string without NUL, at most 4096 characters (the session
+    resolves it; a server keeps it inside its root folder)."""
+    if not isinstance(v, str) or not v.strip() or "\x00" in v or len(v) > 4096:
+        raise ProgramError(f"{what} must be a file name (a non-empty string), got {_show(v)}")
     return v
 
 
@@ -218,6 +227,7 @@ def list_of(convert: Converter) -> Converter:
 
 _LABELS = {
     "text": "string",
+    "file_name": "file",
     "name": "name",
     "ref": "ref",
     "number": "number",

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from workcell.errors import ModelError, ProgramError
+from workcell.errors import ProgramError
 from workcell.examples import CELLS
 from workcell.program import args as a
 from workcell.program.args import arg
@@ -77,7 +77,7 @@ class NewCell(Command, wire="new_cell"):
 class LoadCell(Command, wire="load_cell"):
     """Replace the cell (and its model) by the one saved in ``path``; ends any simulation."""
 
-    path: str = arg(a.text)
+    path: str = arg(a.file_name)
 
     def execute(self, session: Session) -> str:
         from workcell.cell.workcell import Workcell
@@ -91,14 +91,11 @@ class LoadCell(Command, wire="load_cell"):
 class SaveCell(Command, wire="save_cell"):
     """Write the cell to ``path`` as versioned JSON (atomic)."""
 
-    path: str = arg(a.text)
+    path: str = arg(a.file_name)
 
     def execute(self, session: Session) -> str:
         p = session.path(self.path)
-        try:
-            session.require_cell().save(p)
-        except OSError as exc:
-            raise ModelError(f"cannot write cell file '{p}': {exc.strerror or exc}") from exc
+        session.require_cell().save(p)
         return str(p)
 
 

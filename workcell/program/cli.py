@@ -87,16 +87,34 @@ def _outputs(args: argparse.Namespace, sim: Any) -> None:
 
 
 def _serve(args: argparse.Namespace) -> int:
+    import logging
+
+    from workcell.files import install_sigterm_cleanup
     from workcell.program.server import Server
 
+    logging.basicConfig(
+        level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(message)s"
+    )
+    install_sigterm_cleanup()
     token = args.token or os.environ.get("WORKCELL_TOKEN") or None
     make = _start(args)
     make()  # a bad --cell or --mode fails here, not at each client's connection
-    server = Server(args.host, args.port, token=token, shared=args.shared, session_factory=make)
+    server = Server(
+        args.host,
+        args.port,
+        token=token,
+        require_token=not args.no_token,
+        shared=args.shared,
+        session_factory=make,
+        root=args.root,
+        max_connections=args.max_connections,
+        idle_timeout=args.idle_timeout,
+    )
     kind = "one shared session" if args.shared else "a session per client"
+    auth = f"token in {server.token_path}" if server.token_path else "no token"
     print(
-        f"workcell server: listening on {args.host}:{server.port} (protocol 1, {kind}"
-        f"{', token required' if token else ''}); Ctrl-C stops",
+        f"workcell server: listening on {args.host}:{server.port} (protocol 1, {kind}, {auth}, "
+        f"files in {server.root}); Ctrl-C stops",
         flush=True,
     )
     try:
@@ -147,12 +165,45 @@ def register(sub: Any) -> None:
     serve = sub.add_parser(
         "serve",
         help="serve the remote program interface (JSON lines over TCP; docs/protocol.md)",
-        description="Serve programs over TCP. Binds 127.0.0.1 unless --host says otherwise; "
-        "any other address needs --token (or WORKCELL_TOKEN).",
+        description="Serve programs over TCP (docs/protocol.md; its 'Security' section). "
+        "Binds 127.0.0.1 unless --host says otherwise. Clients must send a token: a random "
+        "one, written to a user-only token file that local clients read, unless --token "
+        "(or WORKCELL_TOKEN) gives one. File names in commands stay inside --root.",
     )
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (127.0.0.1)")
     serve.add_argument("--port", type=int, default=5260, help="port (5260; 0: any free port)")
     serve.add_argument("--token", help="token clients must send (or set WORKCELL_TOKEN)")
+    serve.add_argument(
+        "--no-token",
+        action="store_true",
+        help="serve without a token (loopback only; any local user may then connect)",
+    )
+    serve.add_argument(
+        "--root",
+        default=".",
+        metavar="DIR",
+        help="the folder file names in commands resolve inside (default: the current one)",
+    )
+    serve.add_argument(
+        "--max-connections",
+        type=int,
+        default=16,
+        metavar="N",
+        help="connections served at once; more are refused with an error (16)",
+    )
+    serve.add_argument(
+        "--idle-timeout",
+        type=float,
+        default=300.0,
+        metavar="SECONDS",
+        help="close a connection without a request for this long (300)",
+    )
+    serve.add_argument(
+        "--log-level",
+        default="info",
+        choices=("debug", "info", "warning", "error"),
+        help="info: a line per connection and per error; debug: also per command",
+    )
     serve.add_argument(
         "--shared", action="store_true", help="one session for all clients (serialised)"
     )

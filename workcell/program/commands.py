@@ -255,9 +255,16 @@ class WorldMesh(Command, wire="world_mesh"):
     watertightness; with ``path`` also written there (STL, OBJ or PLY by extension)."""
 
     ref: str | tuple[str, str] = arg(a.ref)
-    path: str | None = arg(a.optional(a.text), None)
+    path: str | None = arg(a.optional(a.file_name), None)
 
     def execute(self, session: Session) -> dict[str, Any]:
+        from workcell.files import check_writable
+
+        path = None if self.path is None else session.path(self.path)
+        if path is not None:
+            if path.suffix.lower() not in _MESH_KINDS:
+                raise ModelError(f"cannot write mesh '{path}': use a .stl, .obj or .ply file name")
+            check_writable(path, error=ModelError)  # before the meshing
         mesh = session.model.world_mesh(self.ref)
         out: dict[str, Any] = {
             "vertices": len(mesh.vertices),
@@ -267,23 +274,20 @@ class WorldMesh(Command, wire="world_mesh"):
             "watertight": bool(mesh.is_watertight),
             "path": None,
         }
-        if self.path is not None:
-            out["path"] = str(_export_mesh(mesh, session.path(self.path)))
+        if path is not None:
+            out["path"] = str(_export_mesh(mesh, path))
         return out
+
+
+_MESH_KINDS = {".stl": "stl", ".obj": "obj", ".ply": "ply"}
 
 
 def _export_mesh(mesh: Any, path: Any) -> Any:
     from workcell.files import atomic_write_bytes
 
-    kinds = {".stl": "stl", ".obj": "obj", ".ply": "ply"}
-    kind = kinds.get(path.suffix.lower())
-    if kind is None:
-        raise ModelError(f"cannot write mesh '{path}': use a .stl, .obj or .ply file name")
-    data = mesh.export(file_type=kind)
-    try:
-        atomic_write_bytes(path, data if isinstance(data, bytes) else data.encode("utf-8"))
-    except OSError as exc:
-        raise ModelError(f"cannot write mesh '{path}': {exc.strerror or exc}") from exc
+    data = mesh.export(file_type=_MESH_KINDS[path.suffix.lower()])
+    data = data if isinstance(data, bytes) else data.encode("utf-8")
+    atomic_write_bytes(path, data, error=ModelError)
     return path
 
 
@@ -292,7 +296,7 @@ def _export_mesh(mesh: Any, path: Any) -> Any:
 class SaveModel(Command, wire="save"):
     """Write the model to ``path`` as versioned JSON (atomic)."""
 
-    path: str = arg(a.text)
+    path: str = arg(a.file_name)
 
     def execute(self, session: Session) -> str:
         p = session.path(self.path)
@@ -304,7 +308,7 @@ class SaveModel(Command, wire="save"):
 class LoadModel(Command, wire="load"):
     """Replace the model by the one saved in ``path`` (refused while a cell is loaded)."""
 
-    path: str = arg(a.text)
+    path: str = arg(a.file_name)
 
     def execute(self, session: Session) -> dict[str, list[str]]:
         from workcell.modeller.model import Model

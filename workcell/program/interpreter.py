@@ -16,10 +16,12 @@ from pathlib import Path
 from typing import Any
 
 from workcell.errors import ProgramError, WorkcellError
+from workcell.files import read_text
 from workcell.program.base import Command
 from workcell.program.format import format_result
 from workcell.program.keytree import CommandSyntaxError
 from workcell.program.language import Meta, help_text, parse_line
+from workcell.program.lexer import split_lines
 from workcell.program.session import Session
 
 __all__ = ["Interpreter", "QuitRequest", "check_script", "run_script"]
@@ -81,7 +83,7 @@ def check_script(text: str, name: str = "<script>") -> int:
     Raises the first CommandSyntaxError (or ProgramError) with ``name:line:`` in front.
     """
     n = 0
-    for i, line in enumerate(text.splitlines(), 1):
+    for i, line in enumerate(split_lines(text), 1):
         try:
             n += len(parse_line(line))
         except WorkcellError as exc:
@@ -103,15 +105,12 @@ def run_script(
     script early.
     """
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ProgramError(f"cannot read script '{p}': {exc}") from exc
+    text = read_text(p, what="script", error=ProgramError)
     check_script(text, str(p))
     if session is None:
         session = Session(base_dir=p.parent)
     interp = Interpreter(session, out)
-    for i, line in enumerate(text.splitlines(), 1):
+    for i, line in enumerate(split_lines(text), 1):
         if echo and line.strip() and not line.lstrip().startswith("#"):
             out(f"> {line}")
         try:

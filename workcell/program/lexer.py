@@ -1,5 +1,10 @@
 """Tokens of the command language, with their columns, and the units numbers may carry.
 
+A script's lines end at ``\n`` only (:func:`split_lines`; a ``\r`` before it is dropped).
+A control character, a Unicode line or paragraph separator or a bidirectional-text
+control anywhere else on a line is refused with its column: each could make a line look
+different from what runs (a command hidden behind a comment, text drawn over text).
+
 A line is split at blanks; ``,`` ``(`` ``)`` ``[`` ``]`` also separate (so ``(0, 0, -90)``
 reads as three numbers), ``;`` ends a command (several on one line), ``#`` starts a
 comment and ``"..."`` quotes a string (a file name with blanks; ``\\"`` inside). A chunk
@@ -15,6 +20,7 @@ from __future__ import annotations
 
 import math
 import re
+import unicodedata
 from dataclasses import dataclass
 
 from workcell.errors import ProgramError
@@ -25,6 +31,7 @@ __all__ = [
     "UNITS",
     "Token",
     "split_commands",
+    "split_lines",
     "tokenize",
     "unit_factor",
 ]
@@ -55,6 +62,8 @@ CANONICAL = {
 ALL_UNITS = {u for table in UNITS.values() for u in table}
 _NUMBER = re.compile(r"([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)([A-Za-z°/]*)$")
 _SEPARATORS = " \t\r\n\f\v,()[]"
+# C0 controls but tab and newline, DEL, C1 controls, line/paragraph separators, bidi controls
+_HIDING = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
 
 
 @dataclass(frozen=True)
@@ -87,11 +96,33 @@ def _chunk(text: str, col: int) -> Token:
     return Token("word", text, col, content=text)
 
 
+def split_lines(text: str) -> list[str]:
+    """The lines of a script: split at ``\n`` only, one ``\r`` before it dropped (never at
+    the other characters ``str.splitlines`` splits at: U+2028, U+0085, form feed ...)."""
+    lines = text.split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()
+    return [ln[:-1] if ln.endswith("\r") else ln for ln in lines]
+
+
+def _check_characters(line: str) -> None:
+    m = _HIDING.search(line.rstrip("\n"))
+    if m is not None:
+        ch = m.group()
+        what = unicodedata.name(ch, "a control character")
+        raise ProgramError(
+            f"column {m.start() + 1}: character U+{ord(ch):04X} ({what}) is not allowed: it "
+            "can hide what a line does (lines end only at a newline)"
+        )
+
+
 def split_commands(line: str) -> list[list[Token]]:
     """Tokens of each command on ``line`` (commands separated by ';'; empty ones dropped).
 
-    Raises ProgramError (with the column) for an unterminated string.
+    Raises ProgramError (with the column) for an unterminated string or a character
+    that could hide what the line does (see the module doc).
     """
+    _check_characters(line)
     commands: list[list[Token]] = [[]]
     i, n = 0, len(line)
     while i < n:

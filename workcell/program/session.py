@@ -6,7 +6,9 @@ its parts only after they have been built without error (``cell load`` loads the
 then swaps the cell in), so a failed command leaves the session as it was.
 
 When a cell is present, the session's model *is* the cell's model (parts are modelled
-there). Relative file paths are taken from ``base_dir`` (a script's folder).
+there). Relative file paths are taken from ``base_dir`` (a script's folder); a session
+with a ``root`` folder (every session of ``workcell serve``) takes every file name
+inside ``root`` and refuses the rest (:func:`workcell.files.resolve_inside`).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from workcell.errors import ProgramError, WorkcellError
+from workcell.files import resolve_inside
 from workcell.modeller.model import Model
 
 if TYPE_CHECKING:
@@ -31,6 +34,7 @@ class Session:
 
     ``Session(sim=sim)`` takes the simulator's cell and model; ``Session(cell=cell)`` the
     cell's model. ``lock`` serialises commands when several front ends share a session.
+    ``root``: when given, file names must stay inside this folder (see :meth:`path`).
     """
 
     def __init__(
@@ -40,6 +44,7 @@ class Session:
         cell: Workcell | None = None,
         sim: Simulator | None = None,
         base_dir: str | Path = ".",
+        root: str | Path | None = None,
     ) -> None:
         if sim is not None:
             cell = sim.cell if cell is None else cell
@@ -53,6 +58,7 @@ class Session:
         self.cell = cell
         self.sim = sim
         self.base_dir = Path(base_dir)
+        self.root = None if root is None else Path(root)
         self.lock = threading.RLock()
 
     @property
@@ -93,7 +99,12 @@ class Session:
         return self.sim
 
     def path(self, path: str) -> Path:
-        """``path`` taken from ``base_dir`` when relative (``~`` expanded)."""
+        """The file a command names: with a ``root``, ``path`` relative to it and inside it
+        (absolute paths, ``~``, ``..``, hidden names and symbolic links leading out are
+        refused with ProgramError); without, taken from ``base_dir`` when relative (``~``
+        expanded)."""
+        if self.root is not None:
+            return resolve_inside(self.root, path, error=ProgramError)
         p = Path(path).expanduser()
         return p if p.is_absolute() else self.base_dir / p
 

@@ -17,7 +17,14 @@ from typing import Any
 
 from workcell.examples import CELL_HELP, load_cell
 
-__all__ = ["GRASP_YAWS_DEG", "cell_info", "format_info", "reachability", "register"]
+__all__ = [
+    "GRASP_YAWS_DEG",
+    "cell_info",
+    "collision_info",
+    "format_info",
+    "reachability",
+    "register",
+]
 
 GRASP_YAWS_DEG = (0.0, 45.0, 90.0, 135.0)  # yaws of the top-down grasps tried (deg)
 
@@ -37,6 +44,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     render.add_argument("--width", type=int, default=640, help="pixels (default 640)")
     render.add_argument("--height", type=int, default=480, help="pixels (default 480)")
+    render.add_argument(
+        "--collision",
+        action="store_true",
+        help="draw the collision pieces (each its own colour) instead of the visual meshes",
+    )
+    _concavity_option(render)
     render.set_defaults(func=_render)
     info = sub.add_parser(
         "info",
@@ -47,7 +60,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     info.add_argument("cell", metavar="CELL", help=CELL_HELP)
     info.add_argument("--json", action="store_true", help="print one JSON object")
+    _concavity_option(info)
     info.set_defaults(func=_info)
+
+
+def _concavity_option(parser: argparse.ArgumentParser) -> None:
+    from workcell.decompose import DEFAULT_CONCAVITY
+
+    parser.add_argument(
+        "--concavity",
+        type=float,
+        default=DEFAULT_CONCAVITY,
+        help="error bound of the convex decomposition of non-convex parts (CoACD "
+        f"threshold, a fraction of the part's size; default {DEFAULT_CONCAVITY})",
+    )
 
 
 def _render(args: argparse.Namespace) -> int:
@@ -55,9 +81,18 @@ def _render(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     cell = load_cell(args.cell)
-    image = render_cell(cell, camera=args.camera, width=args.width, height=args.height)
+    image = render_cell(
+        cell,
+        camera=args.camera,
+        width=args.width,
+        height=args.height,
+        collision=args.collision,
+        concavity=args.concavity,
+    )
     path = save_png(image, args.out)
     view = f"camera '{args.camera}'" if args.camera else "overview camera"
+    if args.collision:
+        view += ", collision pieces"
     print(
         f"wrote {path} ({args.width} x {args.height}, {view}, {gl_backend()}, "
         f"{time.perf_counter() - t0:.2f} s)"
@@ -66,7 +101,7 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
-    info = cell_info(load_cell(args.cell))
+    info = cell_info(load_cell(args.cell), concavity=args.concavity)
     print(json.dumps(info) if args.json else format_info(info))
     return 0
 
@@ -79,9 +114,9 @@ def reachability(cell: Any) -> list[dict[str, Any]]:
     """For each movable part and each robot: can the tool reach a top-down grasp?
 
     The target is the part's centroid (world, from its initial pose) with the tool's z
-    axis pointing straight down, at the yaws ``GRASP_YAWS_DEG`` about the vertical. A
-    Puma is solved in closed form (``Robot.ik_closed_form``, any solution within the
-    joint limits), other robots by ``Robot.ik``. Kinematics only: no collision check.
+    axis pointing straight down, at the yaws ``GRASP_YAWS_DEG`` about the vertical. An
+    OPW or UR robot is solved in closed form (``Robot.ik_closed_form``, any solution
+    within the joint limits), other robots by ``Robot.ik``. Kinematics only: no collision check.
     Returns ``{part, robot, reachable, configs, yaw_deg, reason}`` rows.
     """
     import numpy as np
@@ -102,13 +137,13 @@ def reachability(cell: Any) -> list[dict[str, Any]]:
                 T[:3, 3] = centre
                 T = B @ T @ rot_z(math.radians(yaw)) @ rot_x(math.pi)  # tool z down
                 try:
-                    if robot.family == "puma":
+                    if robot.ik_family is not None:
                         sols = [s for s in robot.ik_closed_form(T, placed.q) if s.success]
                         found = [s.config or "" for s in sols]
                         if not found:
-                            from workcell.robots.ik_closed import puma_ik_report
+                            from workcell.robots.ik_closed import ik_report
 
-                            reason = puma_ik_report(robot, T, placed.q)[1] or "no solution"
+                            reason = ik_report(robot, T, placed.q)[1] or "no solution"
                     else:
                         s = robot.ik(T, placed.q)
                         found = [s.config or "numeric"] if s.success else []
@@ -133,9 +168,32 @@ def reachability(cell: Any) -> list[dict[str, Any]]:
     return rows
 
 
-def cell_info(cell: Any) -> dict[str, Any]:
-    """The cell as JSON-able data: robots (limits in deg or m), parts, cameras, reachability."""
+def collision_info(cell: Any, entity: tuple[str, str], concavity: float) -> dict[str, Any]:
+    """How a part collides: ``method`` (see :class:`workcell.meshgeoms.CollisionPieces`),
+    the number of convex ``pieces`` and ``volume_excess``: the pieces' total volume over
+    the part's exact volume, minus 1 (0 when exact; > 0 where pieces bridge concavities
+    or overlap)."""
+    from workcell.meshgeoms import collision_pieces
+
+    c = collision_pieces(cell.model, entity, concavity)
+    exact = float(cell.model.world_mesh(entity).volume)
+    total = sum(float(p.volume) for p in c.pieces)
+    return {
+        "method": c.method,
+        "pieces": len(c.pieces),
+        "volume_excess": round(total / exact - 1.0, 9) if exact > 0 else None,
+        "concavity": concavity if c.method == "coacd" else None,
+    }
+
+
+def cell_info(cell: Any, *, concavity: float | None = None) -> dict[str, Any]:
+    """The cell as JSON-able data: robots (limits in deg or m), parts (with their collision
+    pieces, non-convex ones decomposed within ``concavity``), cameras, reachability."""
     import numpy as np
+
+    from workcell.decompose import DEFAULT_CONCAVITY
+
+    concavity = DEFAULT_CONCAVITY if concavity is None else concavity
 
     robots = []
     for r in cell.robots.values():
@@ -163,7 +221,12 @@ def cell_info(cell: Any) -> dict[str, Any]:
             }
         )
     static = [
-        {"name": p.name, "entity": list(p.entity), "position_m": _r(p.pose[:3, 3])}
+        {
+            "name": p.name,
+            "entity": list(p.entity),
+            "position_m": _r(p.pose[:3, 3]),
+            "collision": collision_info(cell, p.entity, concavity),
+        }
         for p in cell.static_parts.values()
     ]
     movable = []
@@ -177,6 +240,7 @@ def cell_info(cell: Any) -> dict[str, Any]:
                 "centroid_m": _r((p.pose @ cell.centroid_frame(p.name))[:3, 3]),
                 "size_m": _r(np.asarray(hi) - np.asarray(lo)),
                 "mass_kg": round(cell.mass(p.name), 9),
+                "collision": collision_info(cell, p.entity, concavity),
             }
         )
     cameras = [
@@ -200,6 +264,20 @@ def cell_info(cell: Any) -> dict[str, Any]:
 
 def _xyz(v: list[float]) -> str:
     return "(" + ", ".join(f"{x:.3f}" for x in v) + ")"
+
+
+def _collision(c: dict[str, Any]) -> str:
+    n, method = c["pieces"], c["method"]
+    if method == "coacd":
+        what = f"{n} CoACD pieces (concavity {c['concavity']:g})"
+    elif method == "exact":
+        what = f"{n} exact convex pieces (the convex blocks it is made of)"
+    else:
+        what = "convex, its own piece" if method == "convex" else "its convex hull"
+    excess = c["volume_excess"]
+    if c["method"] != "convex" and excess is not None:
+        what += f", {excess * 100:+.2f} % volume"
+    return f"collides as {what}"
 
 
 def format_info(info: dict[str, Any]) -> str:
@@ -227,14 +305,15 @@ def format_info(info: dict[str, Any]) -> str:
             )
     out += ["", "static parts"]
     out += [
-        f"  {p['name']}: {p['entity'][0]} '{p['entity'][1]}' at {_xyz(p['position_m'])} m"
+        f"  {p['name']}: {p['entity'][0]} '{p['entity'][1]}' at {_xyz(p['position_m'])} m; "
+        f"{_collision(p['collision'])}"
         for p in info["static_parts"]
     ] or ["  none"]
     out += ["", "movable parts"]
     out += [
         f"  {p['name']}: {p['entity'][0]} '{p['entity'][1]}', {p['mass_kg']:.4g} kg, "
         f"size {' x '.join(f'{s:.3f}' for s in p['size_m'])} m, "
-        f"centroid {_xyz(p['centroid_m'])} m"
+        f"centroid {_xyz(p['centroid_m'])} m; {_collision(p['collision'])}"
         for p in info["movable_parts"]
     ] or ["  none"]
     out += ["", "cameras"]

@@ -4,7 +4,8 @@ Rendering uses MuJoCo's OpenGL renderer headless; :mod:`workcell.record.gl` pick
 backend (``MUJOCO_GL``, else EGL then OSMesa, a RenderError when none works) when the
 first context is made, and this module keeps it for the process (:func:`gl_backend`).
 
-Pictures show visual geometry only (collision pieces, group 3, and sites hidden), no
+Pictures show visual geometry only (collision pieces, group 3, and sites hidden; with
+``collision=True`` the collision pieces instead, each piece of a solid in its own colour), no
 shadows and no multisampling (about 15x cheaper on a CPU), a sun-like directional light
 plus the head light, and a soft sky where nothing is drawn. The default camera,
 :func:`overview_camera`, frames the visual geometry of the cell over a whole run, so
@@ -31,6 +32,7 @@ from numpy.typing import NDArray
 
 from workcell.errors import ModelError, RenderError
 from workcell.files import atomic_write_bytes
+from workcell.meshgeoms import COLLISION_GROUP, VISUAL_GROUP
 from workcell.record.gl import free_context, open_context
 
 if TYPE_CHECKING:
@@ -61,14 +63,22 @@ __all__ = [
 ]
 
 _SHEETS = ("KEY_EVENT_KINDS", "KeyFrame", "contact_sheet", "key_frames", "save_mp4", "video_frames")
-_COLLISION_GROUP = 3
 _SKY_TOP = np.array([0.45, 0.56, 0.72])  # background gradient (RGB 0-1), top to horizon
 _SKY_HORIZON = np.array([0.74, 0.78, 0.84])
 _FLOOR_RGBA = np.array([0.46, 0.49, 0.54, 1.0])  # planes: darker than the pale arm links
 _GRID_RGBA = np.array([0.56, 0.59, 0.64, 1.0], np.float32)
+_PIECE_RGBA = np.array(  # collision pieces, one colour each in turn (collision pictures)
+    [
+        [0.90, 0.33, 0.25, 1.0],
+        [0.25, 0.60, 0.90, 1.0],
+        [0.95, 0.75, 0.20, 1.0],
+        [0.35, 0.75, 0.40, 1.0],
+        [0.70, 0.45, 0.85, 1.0],
+        [0.95, 0.55, 0.75, 1.0],
+        [0.30, 0.80, 0.80, 1.0],
+    ]
+)
 _backend: str | None = None  # the GL backend that worked, kept for the process
-
-Image = NDArray[np.uint8]
 
 
 def __getattr__(name: str) -> Any:
@@ -109,7 +119,14 @@ class CellRenderer:
     left to the garbage collector at interpreter exit prints EGL errors.
     """
 
-    def __init__(self, model: mujoco.MjModel, width: int = 640, height: int = 480) -> None:
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        width: int = 640,
+        height: int = 480,
+        *,
+        collision: bool = False,
+    ) -> None:
         for what, v in (("width", width), ("height", height)):
             if not (isinstance(v, (int, np.integer)) and 8 <= v <= 8192):
                 raise RenderError(f"{what} must be an integer in [8, 8192] pixels, got {v!r}")
@@ -127,7 +144,12 @@ class CellRenderer:
         m.geom_rgba[planes] = _FLOOR_RGBA
         self.model = m
         self.option = mujoco.MjvOption()
-        self.option.geomgroup[_COLLISION_GROUP:] = 0
+        self.option.geomgroup[COLLISION_GROUP:] = 0
+        if collision:  # the collision pieces instead of the visual meshes
+            self.option.geomgroup[VISUAL_GROUP] = 0
+            self.option.geomgroup[COLLISION_GROUP] = 1
+            cols = np.flatnonzero(m.geom_group == COLLISION_GROUP)
+            m.geom_rgba[cols] = _PIECE_RGBA[np.arange(len(cols)) % len(_PIECE_RGBA)]
         self.option.sitegroup[:] = 0
         self.scene = mujoco.MjvScene(m, maxgeom=max(1000, 2 * m.ngeom))
         self._rect = mujoco.MjrRect(0, 0, self.width, self.height)
@@ -149,7 +171,7 @@ class CellRenderer:
         cam.type, cam.fixedcamid = mujoco.mjtCamera.mjCAMERA_FIXED, cid
         return cam
 
-    def render(self, data: mujoco.MjData, camera: str | mujoco.MjvCamera) -> Image:
+    def render(self, data: mujoco.MjData, camera: str | mujoco.MjvCamera) -> NDArray[np.uint8]:
         """An (H, W, 3) uint8 picture of ``data`` (poses as computed by mj_forward)."""
         if self._mjr is None:
             raise RenderError("the renderer is closed")
@@ -246,7 +268,7 @@ def _floor_grid(m: mujoco.MjModel) -> list[tuple[NDArray[np.float64], NDArray[np
     for g in planes:
         if m.geom_matid[g] >= 0:  # the floor has its own material (a grid texture, say)
             return []
-        if m.geom_group[g] < _COLLISION_GROUP and data.geom_xmat[g][8] > 1 - 1e-9:
+        if m.geom_group[g] < COLLISION_GROUP and data.geom_xmat[g][8] > 1 - 1e-9:
             z = float(data.geom_xpos[g][2]) + 1e-3
             break
     else:
@@ -267,7 +289,7 @@ def _floor_grid(m: mujoco.MjModel) -> list[tuple[NDArray[np.float64], NDArray[np
 def _visual_points(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
     """World corners (8 per geom) of the bounding boxes of the visible non-plane geoms."""
     keep = (
-        (model.geom_group < _COLLISION_GROUP)
+        (model.geom_group < COLLISION_GROUP)
         & (model.geom_type != mujoco.mjtGeom.mjGEOM_PLANE)
         & (model.geom_rgba[:, 3] > 0)
     )
@@ -381,7 +403,7 @@ def render_frame(
     camera: str | None = None,
     width: int = 640,
     height: int = 480,
-) -> Image:
+) -> NDArray[np.uint8]:
     """The cell at timeline ``frame`` (negative counts from the end) as (H, W, 3) uint8.
 
     ``camera``: a camera of the cell by name, or None for :func:`overview_camera` over
@@ -397,16 +419,29 @@ def render_frame(
 
 
 def render_cell(
-    cell: Workcell, *, camera: str | None = None, width: int = 640, height: int = 480
-) -> Image:
-    """The cell in its initial state (no simulation) as (H, W, 3) uint8; see :func:`render_frame`."""
-    from workcell.cell.compile import compile_cell
+    cell: Workcell,
+    *,
+    camera: str | None = None,
+    width: int = 640,
+    height: int = 480,
+    collision: bool = False,
+    concavity: float | None = None,
+) -> NDArray[np.uint8]:
+    """The cell in its initial state (no simulation) as (H, W, 3) uint8; see :func:`render_frame`.
 
-    model = compile_cell(cell).model
+    ``collision``: draw the collision pieces (non-convex parts decomposed within
+    ``concavity``, default :data:`workcell.decompose.DEFAULT_CONCAVITY`), each in its own
+    colour, instead of the visual meshes.
+    """
+    from workcell.cell.compile import compile_cell
+    from workcell.decompose import DEFAULT_CONCAVITY
+
+    bound = DEFAULT_CONCAVITY if concavity is None else concavity
+    model = compile_cell(cell, concavity=bound).model
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     cam = camera if camera is not None else overview_camera(model, width=width, height=height)
-    with CellRenderer(model, width, height) as r:
+    with CellRenderer(model, width, height, collision=collision) as r:
         return r.render(data, cam)
 
 

@@ -19,7 +19,7 @@ import numpy as np
 import rerun as rr
 from numpy.typing import ArrayLike, NDArray
 
-from workcell.robots.mjcf import COLLISION_GROUP
+from workcell.meshgeoms import COLLISION_GROUP
 from workcell.spatial import wxyz_to_xyzw
 
 if TYPE_CHECKING:

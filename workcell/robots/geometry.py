@@ -103,10 +103,11 @@ def puma_geometry(robot: Robot, *, scale: float) -> Robot:
     ``scale`` (> 0) multiplies the Puma 560's cross-sections; spans come from the DH table.
     Raises KinematicsError for a robot that is not a 6-joint standard-DH arm.
     """
-    if robot.convention != "standard" or robot.dof != 6:
+    dh = [j.dh for j in robot.joints]
+    if robot.dof != 6 or any(r is None or r.convention != "standard" for r in dh):
         raise KinematicsError(
-            f"puma_geometry needs a 6-joint standard-DH Puma; robot '{robot.name}' has "
-            f"{robot.dof} joints in {robot.convention} DH"
+            f"puma_geometry needs a 6-joint Puma built from standard DH rows; robot "
+            f"'{robot.name}' has {robot.dof} joints, not all of them standard DH"
         )
     if not (np.isfinite(scale) and scale > 0):
         raise KinematicsError(f"puma_geometry: scale must be a positive number, got {scale!r}")
@@ -115,8 +116,7 @@ def puma_geometry(robot: Robot, *, scale: float) -> Robot:
             f"robot '{robot.name}' carries gripper '{robot.gripper.name}': "
             "give the robot its link solids first, then attach the gripper"
         )
-    j = robot.joints
-    d1, a2, a3, d3, d4 = j[0].d, j[1].a, j[2].a, j[2].d, j[3].d
+    d1, a2, a3, d3, d4 = dh[0].d, dh[1].a, dh[2].a, dh[2].d, dh[3].d  # type: ignore[union-attr]
     s = float(scale)
     m = Model()
     geo: list[LinkGeometry] = []

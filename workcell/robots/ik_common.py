@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -11,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell.errors import KinematicsError
-from workcell.robots.ik_closed import puma_config, puma_ik
+from workcell.robots.ik_closed import config_of, family_of, ik_all, wrist_sine
 from workcell.robots.robot import IKSolution, Robot
 from workcell.spatial import angle_between
 
@@ -47,17 +46,12 @@ def _pose_errors(T: Array, T_target: Array) -> tuple[float, float]:
 def max_reach(robot: Robot) -> float:
     """Upper bound (m) on the distance from the origin of frame 0 (``robot.base``) to the tool point.
 
-    Sum over the DH rows of the largest translation each row can make (``sqrt(a^2 + d^2)``,
-    with d over its limits for a prismatic joint) plus the tool offset. Any target farther
-    than this is out of reach whatever the joint limits.
+    Sum over the joints of the largest translation each joint's transform can make
+    (:meth:`~workcell.robots.chain.Joint.max_translation`: ``sqrt(a^2 + d^2)`` for a DH
+    row, with d over its limits for a prismatic joint) plus the tool offset. Any target
+    farther than this is out of reach whatever the joint limits.
     """
-    r = 0.0
-    for j in robot.joints:
-        if j.kind == "prismatic":
-            d = max(abs(j.limits[0] + j.offset), abs(j.limits[1] + j.offset))
-        else:
-            d = abs(j.d)
-        r += math.hypot(j.a, d)
+    r = sum(j.max_translation() for j in robot.joints)
     return r + float(np.linalg.norm(robot.tool[:3, 3]))
 
 
@@ -70,10 +64,10 @@ def _reach_gap(robot: Robot, T_target: Array) -> float:
 def _check_config(robot: Robot, config: str | None) -> str | None:
     if config is None:
         return None
-    if robot.family != "puma":
+    if family_of(robot) is None:
         raise KinematicsError(
-            f"robot '{robot.name}': config {config!r} applies to the Puma family only "
-            f"(family is {robot.family!r})"
+            f"robot '{robot.name}': config {config!r} applies to robots with a closed-form "
+            "family (OPW or UR) only; this one has none"
         )
     c = str(config).lower()
     if len(c) != 3 or any(
@@ -88,16 +82,16 @@ def _check_config(robot: Robot, config: str | None) -> str | None:
 def _closed_form_seeds(
     robot: Robot, T_target: Array, q_near: Array
 ) -> tuple[list[tuple[Array, str | None]], bool] | None:
-    """Closed-form solutions of a Puma as (q within limits, config), nearest to q_near first.
+    """Closed-form solutions (OPW, UR) as (q within limits, config), nearest to q_near first.
 
     Returns ``(seeds, any_solution)`` where ``any_solution`` says whether the closed form
     found the pose geometrically reachable (limits aside), or None when no closed-form
     solver is available for this robot.
     """
-    if robot.family != "puma":
+    if family_of(robot) is None:
         return None
     try:
-        sols = list(puma_ik(robot, T_target, q_near))
+        sols = list(ik_all(robot, T_target, q_near))
     except KinematicsError:
         return None
     seeds: list[tuple[Array, str | None]] = []
@@ -256,8 +250,9 @@ def _finish(
     """Verify attempt ``a`` with the DH forward kinematics and build the IKSolution."""
     q = np.clip(a.q, robot.lower, robot.upper)
     ep, eo = _pose_errors(robot.fk(q), T_target)
-    cfg = puma_config(robot, q) if robot.family == "puma" else None
-    singular = robot.family == "puma" and abs(math.sin(q[4] + robot.joints[4].offset)) < 1e-3
+    cfg = config_of(robot, q) if family_of(robot) is not None else None
+    sine = wrist_sine(robot, q)
+    singular = sine is not None and sine < 1e-3
     ok = ep <= tol_p and eo <= tol_o and (config is None or cfg == config)
     if not ok and reason is None:
         if ep > tol_p or eo > tol_o:

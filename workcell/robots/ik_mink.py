@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 
 from workcell.errors import KinematicsError
-from workcell.robots.ik_closed import puma_config
+from workcell.robots.ik_closed import config_of
 from workcell.robots.ik_common import (
     STALL_IMPROVEMENT,
     STALL_WINDOW,
@@ -159,7 +159,7 @@ def _random_q_in_config(
     if config is None:
         return q
     for _ in range(tries):
-        if puma_config(robot, q) == config:
+        if config_of(robot, q) == config:
             return q
         q = _random_q(robot, rng)
     return q

@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from workcell.errors import KinematicsError
-from workcell.robots.ik_closed import puma_config
+from workcell.robots.ik_closed import config_of, family_of
 from workcell.robots.ik_common import (
     STALL_IMPROVEMENT,
     STALL_WINDOW,
@@ -36,7 +36,7 @@ __all__ = ["NewtonGaussContext", "newton_gauss_context", "ng_residual_jacobian"]
 class NewtonGaussContext:
     """Per-robot data of the Newton-Gauss solver, built once: the candidate start
     configurations sorted by the condition number of their weighted Jacobian (smallest
-    first) and their configuration letters (Puma family) or None."""
+    first) and their configuration letters (closed-form families) or None."""
 
     starts: list[tuple[Array, float, str | None]]  # (q, condition number, config)
     length: float
@@ -110,7 +110,7 @@ def newton_gauss_context(robot: Robot) -> NewtonGaussContext:
     Candidate starts: the named poses and ``NG_CANDIDATES`` seeded random in-limit
     configurations, ranked by the condition number of the weighted 6xn Jacobian
     ``[J_v / length; J_w]`` (equal to that of the 7xn Jacobian at a zero rotation error,
-    whose trace row vanishes there). Puma robots keep the best ``NG_STARTS_PER_CONFIG``
+    whose trace row vanishes there). Closed-form robots keep the best ``NG_STARTS_PER_CONFIG``
     per configuration (so every branch has a start); other robots keep
     ``NG_GENERIC_STARTS`` mutually distant ones.
     """
@@ -123,10 +123,10 @@ def newton_gauss_context(robot: Robot) -> NewtonGaussContext:
     cands += [_random_q(robot, rng) for _ in range(NG_CANDIDATES)]
     scored = sorted(((q, _condition(chain, q, length)) for q in cands), key=lambda t: t[1])
     starts: list[tuple[Array, float, str | None]] = []
-    if robot.family == "puma":
+    if family_of(robot) is not None:
         per: dict[str, int] = {}
         for q, c in scored:
-            k = puma_config(robot, q)
+            k = config_of(robot, q)
             if per.get(k, 0) < NG_STARTS_PER_CONFIG and math.isfinite(c):
                 per[k] = per.get(k, 0) + 1
                 starts.append((q, c, k))
@@ -254,7 +254,7 @@ def _solve_newton_gauss(
     # Smallest condition number first; the requested configuration's starts (or else those
     # of q0's configuration, so the answer stays on the caller's branch) before the others.
     prefer = config or (
-        puma_config(robot, q0) if q0 is not None and robot.family == "puma" else None
+        config_of(robot, q0) if q0 is not None and family_of(robot) is not None else None
     )
     starts = sorted(ctx.starts, key=lambda s: (prefer is not None and s[2] != prefer, s[1]))
     if q0 is not None:  # the caller's q0 after the well-conditioned starts

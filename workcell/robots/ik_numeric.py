@@ -4,7 +4,7 @@
 returns a silently wrong q: a result has ``success=True`` only when ``robot.fk(q)`` (the
 DH forward kinematics, not the solver's own model) is within ``tol_position`` (m) and
 ``tol_orientation`` (rad) of the target, q lies within the joint limits and, when
-``config`` is given, q has that Puma configuration. Otherwise ``success=False`` with the
+``config`` is given, q has that configuration (OPW and UR robots). Otherwise ``success=False`` with the
 closest pose reached (q of the best attempt, always finite and within the limits), its
 errors and a ``reason``.
 
@@ -14,8 +14,8 @@ Two methods:
   one ``FrameTask`` on the ``"tool"`` site (position and orientation cost 1,
   ``lm_damping``), the daqp QP backend, a prebuilt ``ConfigurationLimit`` (exact limits),
   tiny global damping and no posture task (see ``/work/shared/notes/mink.md``, P1-P5).
-  Attempts, in order: ``q0``; for the Puma family the closed-form solutions nearest to
-  ``q0`` (``workcell.robots.ik_closed.puma_ik``), filtered by
+  Attempts, in order: ``q0``; for OPW and UR robots the closed-form solutions nearest to
+  ``q0`` (``workcell.robots.ik_closed.ik_all``), filtered by
   ``config``; then seeded random in-limit configurations. An attempt ends when converged,
   when the error stops improving over a window of iterations, or when the step vanishes.
 - ``"newton-gauss"``: the thesis's solver. Seven equations in n unknowns: position (3), the
@@ -23,7 +23,7 @@ Two methods:
   ``vect(E) = 1/2 (e32 - e23, e13 - e31, e21 - e12) = sin(theta) k``) and its trace (1,
   ``(trace(E) - 3) / 2 = cos(theta) - 1``), solved in the least-squares sense with the
   analytic 7xn Jacobian, Levenberg-Marquardt damped. Robustness as in the thesis: start
-  from the configuration whose Jacobian condition number is smallest (one per Puma
+  from the configuration whose Jacobian condition number is smallest (one per
   configuration, or a spread of well-conditioned samples for other robots), follow a
   continuation path from that start's pose to the target (linear position, SLERP
   orientation) solving each step from the previous one, then polish. Joint limits: each
@@ -90,8 +90,8 @@ def solve(
 
     ``q0`` (rad/m): for mink the first start (default: the robot's ``"home"`` pose, else
     mid-range); for Newton-Gauss, which starts where the Jacobian is best conditioned, the
-    starts in q0's Puma configuration go first and q0 itself follows the listed starts;
-    ``config`` restricts a Puma solution to a configuration such as ``"lun"``; ``method``
+    starts in q0's configuration go first and q0 itself follows the listed starts;
+    ``config`` restricts an OPW or UR solution to a configuration such as ``"lun"``; ``method``
     ``"mink"`` or ``"newton-gauss"``; tolerances in m (``tol_position``, tool-point
     distance) and rad (``tol_orientation``, angle of ``R^T R_target``);
     ``max_iterations`` per attempt (per final polish for Newton-Gauss); ``restarts`` the

@@ -1,16 +1,16 @@
-"""Robots to MuJoCo through MjSpec: one body per link, one joint per DH row, link meshes, a tool site.
+"""Robots to MuJoCo through MjSpec: one body per link, one joint per chain joint, link meshes, a tool site.
 
-Standard DH: joint i turns about z of frame i-1, so body i is frame i-1 turned by joint i;
-it sits in body i-1 at what row i-1 adds besides its own joint motion, and DH frame i is
-body i's frame times :func:`fixed_part` of row i. A solid that :class:`LinkGeometry`
-places in DH frame i therefore sits in body i at ``fixed_part(row i) @ transform``.
-Modified DH: joint i turns about z of frame i, so body i is frame i. Names carry a prefix
+Body i is link frame i (:mod:`workcell.robots.chain`): it sits in body i-1 at the joint's
+``origin`` and carries a hinge (revolute) or slide (prismatic) with the joint's ``axis``
+and, for a hinge, ``pos`` = its ``axis_point``, so MuJoCo's body frame follows
+``origin @ M(q)`` exactly. A solid that :class:`LinkGeometry` places in link frame i sits
+in body i at its ``transform``. Names carry a prefix
 (``"puma_1."``) so several robots can share a cell; ``/`` is never used (dm_control
 reserves it).
 
 Link solids (``robot.geometry``) become, per solid, one visual mesh geom (the exact mesh,
 ``inertia="exact"``, ``density`` kg/m^3, group 2, no contacts) and convex collision geoms
-(group 3, density 0; see :mod:`workcell.robots.meshes` for the pieces), so each body's
+(group 3, density 0; see :mod:`workcell.meshgeoms` for the pieces), so each body's
 mass and inertia are those of its exact meshes. A body without solids keeps a small
 placeholder inertia. A gripper (``robot.gripper``) is a body ``{prefix}{gripper}`` fixed to
 the last link at its mount, with the palm, and two finger bodies on slide joints
@@ -21,7 +21,7 @@ joints' reference and initial value, as the solids are drawn). The tool site sit
 bodies count as the last link).
 
 For physics (the kinematic simulator ignores all of this): collision geoms have stiff
-contacts (``solref`` :data:`CONTACT_SOLREF`, ``solimp`` :data:`CONTACT_SOLIMP`); every
+contacts (``solref`` and ``solimp`` of :mod:`workcell.meshgeoms`); every
 body has ``gravcomp="1"`` (the arm carries its own weight, as a real arm's
 gravity-compensating servos do; a payload is not compensated); every arm joint has an
 ``armature`` (the reflected inertia of a geared motor's rotor, kg m^2 or kg;
@@ -46,36 +46,33 @@ import os
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import mujoco
 import numpy as np
-import trimesh
 from numpy.typing import NDArray
 
 from workcell.errors import GeometryError, ModelError
 from workcell.files import atomic_write_bytes, atomic_write_text
-from workcell.robots.meshes import convex_pieces, stl_bytes
-from workcell.robots.robot import Joint, Robot
-from workcell.spatial import invert, is_rigid, quat_from_matrix, rot_x, rot_z, translation
+from workcell.meshgeoms import (
+    MESHDIR,
+    MeshAssets,
+    add_mesh_geoms,
+    collision_meshes,
+    convex_pieces,
+)
+from workcell.robots.robot import Robot
+from workcell.spatial import invert, is_rigid, quat_from_matrix
 
 __all__ = [
     "ARMATURE",
     "ARM_DENSITY",
-    "COLLISION_GROUP",
-    "CONTACT_SOLIMP",
-    "CONTACT_SOLREF",
-    "MESHDIR",
     "SERVO_DAMPING",
     "SERVO_FREQUENCY",
     "TOOL_SITE",
-    "VISUAL_GROUP",
-    "add_mesh_geoms",
     "body_name",
     "export_robot",
     "finger_joint_names",
-    "fixed_part",
     "gripper_body_name",
     "joint_name",
     "kinematic_model",
@@ -85,16 +82,9 @@ __all__ = [
 
 TOOL_SITE = "tool"
 ARM_DENSITY = 2700.0  # kg/m^3, aluminium
-VISUAL_GROUP = 2
-COLLISION_GROUP = 3
-MESHDIR = "meshes"
 ARMATURE = 0.02  # kg m^2 (revolute) or kg (prismatic): a small geared motor's reflected rotor
 SERVO_FREQUENCY = 15.0  # Hz: natural frequency of each joint's position servo
 SERVO_DAMPING = 1.0  # damping ratio of each joint's position servo
-CONTACT_SOLREF = (0.004, 1.0)  # s, damping ratio: stiff contacts (MuJoCo clamps to >= 2 dt)
-CONTACT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)  # MuJoCo's default is (0.9, 0.95, 0.001, ...)
-_EXACT = mujoco.mjtMeshInertia.mjMESH_INERTIA_EXACT
-_MESH = mujoco.mjtGeom.mjGEOM_MESH
 
 Array = NDArray[np.float64]
 
@@ -126,56 +116,8 @@ def _pos_quat(T: Array) -> tuple[list[float], list[float]]:
     return T[:3, 3].tolist(), quat_from_matrix(T[:3, :3]).tolist()
 
 
-def fixed_part(j: Joint, convention: str) -> Array:
-    """The constant part of a DH row once the joint's own motion about/along z is taken out.
-
-    Standard: Rz(theta0) Tz(d0) Tx(a) Rx(alpha); modified: Rx(alpha) Tx(a) Rz(theta0) Tz(d0),
-    where theta0 = offset, d0 = d for a revolute joint and theta0 = theta, d0 = offset for a
-    prismatic one (a rotation and a translation along the same axis commute).
-    """
-    theta0, d0 = (j.theta, j.offset) if j.kind == "prismatic" else (j.offset, j.d)
-    rz = translation(0, 0, d0) @ rot_z(theta0)
-    xa = translation(j.a, 0, 0) @ rot_x(j.alpha)
-    return xa @ rz if convention == "modified" else rz @ xa
-
-
-def _frame_in_body(robot: Robot, k: int) -> Array:
-    """DH frame k expressed in body k's frame (k = 0..n)."""
-    if k == 0 or robot.convention == "modified":
-        return np.eye(4)
-    return fixed_part(robot.joints[k - 1], "standard")
-
-
-@dataclass
-class _Meshes:
-    """Mesh assets and unique names while one spec is built."""
-
-    spec: mujoco.MjSpec
-    prefix: str
-    assets: dict[str, bytes] = field(default_factory=dict)
-    names: dict[str, set[str]] = field(default_factory=lambda: {"mesh": set(), "geom": set()})
-
-    def unique(self, name: str, kind: str = "geom") -> str:
-        """``name``, or ``name.2``, ``name.3`` ... when a ``kind`` of that name exists."""
-        taken = self.names[kind]
-        out, k = name, 1
-        while out in taken:
-            k += 1
-            out = f"{name}.{k}"
-        taken.add(out)
-        return out
-
-    def add(self, name: str, mesh: trimesh.Trimesh) -> str:
-        """Register ``mesh`` as asset ``name`` (made unique); return the mesh name."""
-        mname = self.unique(name, "mesh")
-        file = f"{mname}.stl"
-        self.assets[file] = stl_bytes(mesh)
-        self.spec.add_mesh(name=mname, file=file, inertia=_EXACT)
-        return mname
-
-
 def _placed_meshes(
-    robot: Robot, block: str, T: Array, reg: _Meshes, cache: dict[str, tuple[str, list[str]]]
+    robot: Robot, block: str, T: Array, reg: MeshAssets, cache: dict[str, tuple[str, list[str]]]
 ) -> tuple[str, list[str], Array]:
     """(visual mesh, collision meshes, geom pose) of ``block`` placed by T in a body."""
     model = robot.model
@@ -183,12 +125,7 @@ def _placed_meshes(
         if block not in cache:
             pieces, convex = convex_pieces(model, block)
             vis = reg.add(f"{reg.prefix}{block}", model.world_mesh(("block", block)))
-            col = (
-                [vis]
-                if convex
-                else [reg.add(f"{reg.prefix}{block}.hull{i}", p) for i, p in enumerate(pieces)]
-            )
-            cache[block] = (vis, col)
+            cache[block] = (vis, collision_meshes(reg, f"{reg.prefix}{block}", pieces, convex, vis))
         vis, col = cache[block]
         return vis, col, T
     # a scaled, sheared or mirrored placement is baked into new vertices (geom poses are
@@ -196,14 +133,8 @@ def _placed_meshes(
     m = model.world_mesh(("block", block)).copy().apply_transform(T)
     vis = reg.add(f"{reg.prefix}{block}.placed", m)
     pieces, convex = convex_pieces(model, block)
-    if convex:
-        col = [vis]
-    else:
-        col = []
-        for i, p in enumerate(pieces):
-            q = p.copy().apply_transform(T)
-            col.append(reg.add(f"{reg.prefix}{block}.placed.hull{i}", q.convex_hull))
-    return vis, col, np.eye(4)
+    placed = [p.copy().apply_transform(T).convex_hull for p in pieces]
+    return vis, collision_meshes(reg, f"{reg.prefix}{block}.placed", placed, convex, vis), np.eye(4)
 
 
 def _add_solid(
@@ -213,7 +144,7 @@ def _add_solid(
     T: Array,
     colour: tuple[float, ...] | None,
     density: float,
-    reg: _Meshes,
+    reg: MeshAssets,
     cache: dict[str, tuple[str, list[str]]],
 ) -> None:
     """One visual geom (mass carrier) and the collision geoms of a solid, placed by T."""
@@ -231,52 +162,6 @@ def _add_solid(
         density=density,
         rgba=rgba,
     )
-
-
-def add_mesh_geoms(
-    body: mujoco.MjsBody,
-    visuals: list[tuple[str, str]],
-    collisions: list[str],
-    *,
-    collision_prefix: str,
-    pos: list[float],
-    quat: list[float],
-    density: float,
-    rgba: list[float],
-) -> None:
-    """The geoms of one solid in ``body``: visual mesh geoms that carry the mass and no
-    contacts (``visuals`` = (geom name, mesh name) pairs, group 2) and massless collision
-    geoms named ``{collision_prefix}.col{i}`` on the ``collisions`` meshes (group 3, stiff
-    contacts: :data:`CONTACT_SOLREF`, :data:`CONTACT_SOLIMP`). ``density`` in kg/m^3;
-    ``pos``/``quat`` place the meshes in the body (m, wxyz)."""
-    for geom, mesh in visuals:
-        body.add_geom(
-            name=geom,
-            type=_MESH,
-            meshname=mesh,
-            pos=pos,
-            quat=quat,
-            density=density,
-            contype=0,
-            conaffinity=0,
-            group=VISUAL_GROUP,
-            rgba=rgba,
-        )
-    for i, mesh in enumerate(collisions):
-        body.add_geom(
-            name=f"{collision_prefix}.col{i}",
-            type=_MESH,
-            meshname=mesh,
-            pos=pos,
-            quat=quat,
-            density=0.0,
-            contype=1,
-            conaffinity=1,
-            group=COLLISION_GROUP,
-            rgba=[*rgba[:3], 0.5],
-            solref=list(CONTACT_SOLREF),
-            solimp=list(CONTACT_SOLIMP),
-        )
 
 
 def _check_prefix(prefix: str) -> None:
@@ -320,7 +205,7 @@ def robot_spec(
     with_geo = geometry and robot.model is not None and bool(robot.geometry)
     gripper = robot.gripper if with_geo else None
     gripper_blocks = {p.block for p in gripper.geometry} if gripper is not None else set()
-    reg = _Meshes(spec, prefix)
+    reg = MeshAssets(spec, prefix)
     cache: dict[str, tuple[str, list[str]]] = {}
     inertia = [0.4 * mass * 0.05**2] * 3
 
@@ -330,9 +215,8 @@ def robot_spec(
         if not mine:
             body.mass, body.inertia = mass, inertia
             return
-        F = _frame_in_body(robot, k)
         for g in mine:
-            _add_solid(body, robot, g.block, F @ g.transform, g.colour, density, reg, cache)
+            _add_solid(body, robot, g.block, g.transform, g.colour, density, reg, cache)
 
     bodies: list[tuple[str, int]] = []
     parent = spec.worldbody.add_body(name=body_name(prefix, 0))
@@ -341,16 +225,13 @@ def robot_spec(
     bodies.append((parent.name, 0))
     for i, j in enumerate(robot.joints):
         body = parent.add_body(name=body_name(prefix, i + 1))
-        if robot.convention == "standard":
-            placement = fixed_part(robot.joints[i - 1], "standard") if i > 0 else np.eye(4)
-        else:
-            placement = fixed_part(j, "modified")
-        body.pos, body.quat = _pos_quat(placement)
+        body.pos, body.quat = _pos_quat(j.origin)
         kind = mujoco.mjtJoint.mjJNT_SLIDE if j.kind == "prismatic" else mujoco.mjtJoint.mjJNT_HINGE
         body.add_joint(
             name=joint_name(robot, prefix, i),
             type=kind,
-            axis=[0, 0, 1],
+            axis=j.axis.tolist(),
+            pos=j.axis_point.tolist(),
             range=list(j.limits),
             limited=mujoco.mjtLimited.mjLIMITED_TRUE,
             armature=float(armature),
@@ -359,14 +240,13 @@ def robot_spec(
         bodies.append((body.name, i + 1))
         parent = body
     n = robot.dof
-    last = _frame_in_body(robot, n)
     if gripper is None:
-        pos, quat = _pos_quat(last @ robot.tool)
+        pos, quat = _pos_quat(robot.tool)
         parent.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)
     else:
         gname = gripper_body_name(robot, prefix)
         gbody = parent.add_body(name=gname)
-        gbody.pos, gbody.quat = _pos_quat(last @ gripper.mount)
+        gbody.pos, gbody.quat = _pos_quat(gripper.mount)
         bodies.append((gname, n))
         for p in gripper.geometry:
             if p.role == "palm":

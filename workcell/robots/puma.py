@@ -6,9 +6,10 @@ Sources:
   the same file (after Wang and Chen); named poses qz, qr, qs, qn from the same file
   (qn's q3 = pi is stored as its in-limit equivalent -pi).
 - Puma 260: RPI General Robotics Toolbox ``puma260b_robot()``, which cites page 2-2 of the
-  Puma 260 manual (a2 = sqrt(7.8^2 + 0.75^2) in, elbow drop absorbed by the +-5.4923 deg
-  offsets); flange at Tz(0.05588) from frame 6; joint speed limits of a 260-class arm from
-  the same source. Thesis home pose (0, 0, -90, 0, 90, 0) deg.
+  Puma 260 manual (a2 = sqrt(7.8^2 + 0.75^2) in, elbow drop absorbed by the
+  +-atan2(0.75, 7.8) = +-5.4923 deg offsets; exact values, as DESIGN.md tables them);
+  flange at Tz(0.05588) from frame 6; joint speed limits of a 260-class arm from the
+  same source. Thesis home pose (0, 0, -90, 0, 90, 0) deg.
 """
 
 from __future__ import annotations
@@ -16,9 +17,10 @@ from __future__ import annotations
 import numpy as np
 
 from workcell import spatial
-from workcell.robots.robot import Robot, joints_from_table
+from workcell.robots.chain import joints_from_table
+from workcell.robots.robot import Robot
 
-__all__ = ["PUMA260_FLANGE", "puma260", "puma560"]
+__all__ = ["PUMA260_A2", "PUMA260_DELTA", "PUMA260_FLANGE", "puma260", "puma560"]
 
 PUMA260_FLANGE = 0.05588  # m, flange from frame 6 along z
 _DEG = np.pi / 180
@@ -34,10 +36,13 @@ _PUMA560 = [
 ]
 _PUMA560_LIMITS = [(-160, 160), (-45, 225), (-225, 45), (-110, 170), (-100, 100), (-266, 266)]
 
+# DESIGN.md: the upper arm is 7.8 in long with a 0.75 in elbow drop, absorbed by offsets
+PUMA260_A2 = 0.0254 * float(np.hypot(7.8, 0.75))  # m (0.1990337...)
+PUMA260_DELTA = float(np.degrees(np.arctan2(0.75, 7.8)))  # deg (5.4923...)
 _PUMA260 = [
     (0.0, 0.3302, 90.0, 0.0),
-    (0.199034, 0.0, 0.0, -5.4923),
-    (0.0, 0.12446, -90.0, 5.4923),
+    (PUMA260_A2, 0.0, 0.0, -PUMA260_DELTA),
+    (0.0, 0.12446, -90.0, PUMA260_DELTA),
     (0.0, 0.2032, 90.0, 0.0),
     (0.0, 0.0, -90.0, 0.0),
     (0.0, 0.0, 0.0, 0.0),
@@ -64,7 +69,6 @@ def puma560(*, geometry: bool = True) -> Robot:
             "qn": np.array([0, np.pi / 4, -np.pi, 0, np.pi / 4, 0]),
             "home": np.array([0, 0, -90, 0, 90, 0]) * _DEG,
         },
-        family="puma",
         source="P. Corke, Robotics Toolbox for Python, models/DH/Puma560.py (standard DH)",
     )
     return _geometry(r, scale=1.0) if geometry else r
@@ -80,7 +84,6 @@ def puma260(*, geometry: bool = True) -> Robot:
             "home": np.array([0, 0, -90, 0, 90, 0]) * _DEG,
             "zero": np.zeros(6),
         },
-        family="puma",
         source="RPI General Robotics Toolbox puma260b_robot(), after the Puma 260 manual p. 2-2",
     )
     return _geometry(r, scale=0.46) if geometry else r

@@ -1,19 +1,19 @@
-"""Serial robots identified by Denavit-Hartenberg parameters (thesis §4.2).
+"""Serial robots: a chain of joints, base and tool transforms, link geometry (thesis §4.2).
 
-A :class:`Robot` is an ordered list of :class:`Joint` rows plus a base and a tool
-transform. Standard DH (the default) places frame i from frame i-1 by
-``Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``; modified DH (Craig) by
-``Rx(alpha_i) Tx(a_i) Rz(theta_i) Tz(d_i)``, with a row's ``a``, ``alpha`` being the
-a_{i-1}, alpha_{i-1} of the textbook. A revolute joint varies theta = q + offset, a
-prismatic joint varies d = q + offset. Units: metres, radians, seconds.
+A :class:`Robot` is an ordered chain of :class:`~workcell.robots.chain.Joint` (a fixed
+origin transform, an axis and a kind each; standard and modified DH rows are two ways to
+build one, see :mod:`workcell.robots.chain`) plus a base and a tool transform. Units:
+metres, radians, seconds.
 
-Forward kinematics ``fk(q) = base @ A_1(q_1) ... A_n(q_n) @ tool``: the tool pose in the
-robot's base frame (``base`` is the identity unless set).
+Forward kinematics ``fk(q) = base @ A_1(q_1) ... A_n(q_n) @ tool`` with
+``A_i = origin_i @ M_i(q_i)``: the tool pose in the robot's base frame (``base`` is the
+identity unless set). Link frame i (:meth:`Robot.link_frames`) is ``base @ A_1 ... A_i``;
+for a robot built from DH rows it is DH frame i.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from functools import partial
 from typing import TYPE_CHECKING, Literal, NamedTuple
@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell.errors import JointLimitError, KinematicsError, UnreachableError
+from workcell.robots.chain import Joint, linear_terms
 from workcell.spatial import as_transform
 
 if TYPE_CHECKING:
@@ -33,46 +34,6 @@ __all__ = ["IKSolution", "Joint", "LinkGeometry", "Robot"]
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * np.pi
 _FK_CHUNK = 2048  # poses per batched FK step (measured: 1.5M poses/s here against 0.8M unchunked)
-
-
-@dataclass(frozen=True)
-class Joint:
-    """One DH row and its joint: ``kind`` revolute (q in rad) or prismatic (q in m).
-
-    ``limits`` (lo, hi) and ``max_speed`` (rad/s or m/s), ``max_acceleration`` (rad/s^2
-    or m/s^2) and ``max_jerk`` (rad/s^3 or m/s^3) bound the joint variable q and its
-    derivatives (inf where none is known); ``offset`` is added to q (theta = q + offset,
-    or d = q + offset for prismatic joints).
-    """
-
-    name: str
-    a: float = 0.0
-    alpha: float = 0.0
-    d: float = 0.0
-    theta: float = 0.0
-    offset: float = 0.0
-    kind: Literal["revolute", "prismatic"] = "revolute"
-    limits: tuple[float, float] = (-np.pi, np.pi)
-    max_speed: float = float("inf")
-    max_acceleration: float = float("inf")
-    max_jerk: float = float("inf")
-
-    def __post_init__(self) -> None:
-        if self.kind not in ("revolute", "prismatic"):
-            raise KinematicsError(
-                f"joint '{self.name}': kind must be revolute or prismatic, got {self.kind!r}"
-            )
-        lo, hi = self.limits
-        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-            raise KinematicsError(
-                f"joint '{self.name}': limits must be finite with lo < hi, got {self.limits}"
-            )
-        for what in ("max_speed", "max_acceleration", "max_jerk"):
-            value = getattr(self, what)
-            if not value > 0:
-                raise KinematicsError(
-                    f"joint '{self.name}': {what} must be > 0 (inf: no limit), got {value}"
-                )
 
 
 @dataclass(frozen=True)
@@ -108,22 +69,21 @@ class IKSolution(NamedTuple):
 
 @dataclass(frozen=True, eq=False)
 class Robot:
-    """A serial manipulator: DH joints, base and tool transforms, named poses, link geometry.
+    """A serial manipulator: a chain of joints, base and tool transforms, named poses, link geometry.
 
-    ``nominal_speed`` (rad/s) is the thesis's robot speed: the speed of the joint that
-    moves most in a joint-space motion. ``family`` names a closed-form IK solver
-    (``"puma"``) when the geometry admits one. ``model`` holds the link solids named by
-    ``geometry``; ``source`` cites where the parameters come from.
+    ``tool`` (4x4) places the tool frame in the last link frame (the flange for robots
+    whose tool is not set); ``nominal_speed`` (rad/s) is the thesis's robot speed: the
+    speed of the joint that moves most in a joint-space motion. ``model`` holds the link
+    solids named by ``geometry``; ``source`` cites where the parameters come from. The
+    closed-form IK family (:attr:`ik_family`) is detected from the geometry.
     """
 
     name: str
     joints: tuple[Joint, ...]
     base: Array = field(default_factory=lambda: np.eye(4))
     tool: Array = field(default_factory=lambda: np.eye(4))
-    convention: Literal["standard", "modified"] = "standard"
     poses: Mapping[str, Array] = field(default_factory=dict)
     nominal_speed: float = 0.3
-    family: str | None = None
     model: Model | None = None
     geometry: tuple[LinkGeometry, ...] = ()
     source: str = ""
@@ -134,8 +94,8 @@ class Robot:
         put("joints", tuple(self.joints))
         if not self.joints:
             raise KinematicsError(f"robot '{self.name}' has no joints")
-        if self.convention not in ("standard", "modified"):
-            raise KinematicsError(f"robot '{self.name}': convention must be standard or modified")
+        if not all(isinstance(j, Joint) for j in self.joints):
+            raise KinematicsError(f"robot '{self.name}': joints must be Joint objects")
         names = [j.name for j in self.joints]
         if len(set(names)) != len(names):
             raise KinematicsError(f"robot '{self.name}': joint names repeat: {names}")
@@ -144,7 +104,8 @@ class Robot:
         put("poses", {k: self._vector(v, f"pose '{k}'") for k, v in dict(self.poses).items()})
         if not self.nominal_speed > 0:
             raise KinematicsError(f"robot '{self.name}': nominal_speed must be > 0 rad/s")
-        put("_offset", np.array([j.offset for j in self.joints]))
+        put("_axes", np.array([j.axis for j in self.joints]))  # (n, 3) in link frames
+        put("_points", np.array([j.axis_point for j in self.joints]))  # (n, 3) m
         put("_prismatic", np.array([j.kind == "prismatic" for j in self.joints]))
         put("_any_prismatic", bool(self._prismatic.any()))
         put("_lo", np.array([j.limits[0] for j in self.joints]))
@@ -152,8 +113,8 @@ class Robot:
         put("_lo_turns", self._lo / TWO_PI - 1e-12)  # limits in turns, with the wrap slack
         put("_hi_turns", self._hi / TWO_PI + 1e-12)
         # every joint matrix is linear in (u, v): A = C0 + u C1 + v C2, with (u, v) =
-        # (cos theta, sin theta) for a revolute joint and (d, 0) for a prismatic one
-        C0, C12 = _linear_joint_terms(self)
+        # (cos q, sin q) for a revolute joint and (q, 0) for a prismatic one
+        C0, C12 = linear_terms(self.joints)
         put("_C", (C0, np.ascontiguousarray(C12[:, 0]), np.ascontiguousarray(C12[:, 1])))
         # the same with the base folded into joint 1 and the tool into joint n (for FK)
         C0, C12 = C0.reshape(-1, 4, 4).copy(), C12.reshape(-1, 2, 4, 4).copy()
@@ -279,10 +240,9 @@ class Robot:
 
         ``folded``: base included in A_1 and tool in A_n, so their product is the tool pose.
         """
-        u = Q + self._offset
-        c, s = np.cos(u), np.sin(u)
+        c, s = np.cos(Q), np.sin(Q)
         if self._any_prismatic:
-            c[..., self._prismatic] = u[..., self._prismatic]
+            c[..., self._prismatic] = Q[..., self._prismatic]
             s[..., self._prismatic] = 0.0
         C0, C1, C2 = self._Cf if folded else self._C
         A = c[..., None] * C1
@@ -342,22 +302,23 @@ class Robot:
         """Tool pose (4, 4) and geometric Jacobian (6, n) of the tool point, base frame.
 
         Jacobian rows: linear velocity (m/s) then angular velocity (rad/s) per unit joint
-        speed. Joint i moves about (or along) the z axis of frame i-1 (standard DH) or of
-        frame i (modified DH).
+        speed. Joint i turns about (or slides along) its axis line, fixed in link frame i.
         """
         q = np.asarray(q, dtype=np.float64)
         if q.shape != (self.dof,):
             q = self._vector(q)  # raises with a clear message
         F = self._frames(q)
         T = F[-1] @ self.tool
-        axes = F[:-1] if self.convention == "standard" else F[1:]
-        z, r = axes[:, :3, 2], T[:3, 3] - axes[:, :3, 3]
+        R = F[1:, :3, :3]
+        z = np.einsum("nij,nj->ni", R, self._axes)  # axis directions in the base frame
+        p = np.einsum("nij,nj->ni", R, self._points) + F[1:, :3, 3]
+        r = T[:3, 3] - p
         J = np.empty((6, self.dof))
         J[0] = z[:, 1] * r[:, 2] - z[:, 2] * r[:, 1]
         J[1] = z[:, 2] * r[:, 0] - z[:, 0] * r[:, 2]
         J[2] = z[:, 0] * r[:, 1] - z[:, 1] * r[:, 0]
         J[3:] = z.T
-        if self._prismatic.any():
+        if self._any_prismatic:
             J[:3, self._prismatic] = z[self._prismatic].T
             J[3:, self._prismatic] = 0.0
         return T, J
@@ -367,19 +328,24 @@ class Robot:
         return self.pose_jacobian(self._vector(q))[1]
 
     # ---------------------------------------------------------------- inverse kinematics
+    @property
+    def ik_family(self) -> str | None:
+        """The closed-form IK family, ``"opw"``, ``"ur"`` or None, detected from the joint
+        axes and verified by FK (:mod:`workcell.robots.ik_closed`; cached per robot)."""
+        from workcell.robots.ik_closed import family_of
+
+        return family_of(self)
+
     def ik_closed_form(self, T: ArrayLike, q_current: ArrayLike | None = None) -> list[IKSolution]:
-        """Every distinct closed-form solution of pose T (Puma family), up to 8.
+        """Every distinct closed-form solution of pose T (OPW and UR families), up to 8.
 
         In-limit solutions first, then nearest to ``q_current`` (see
-        :func:`workcell.robots.ik_closed.puma_ik_report` for the fields and the order).
+        :func:`workcell.robots.ik_closed.ik_report` for the fields and the order).
+        KinematicsError for a robot without a closed-form family.
         """
-        if self.family != "puma":
-            raise KinematicsError(
-                f"robot '{self.name}' has no closed-form IK (family {self.family!r}); use Robot.ik"
-            )
-        from workcell.robots.ik_closed import puma_ik
+        from workcell.robots.ik_closed import ik_all
 
-        return puma_ik(self, T, q_current)
+        return ik_all(self, T, q_current)
 
     def ik(
         self,
@@ -392,9 +358,9 @@ class Robot:
     ) -> IKSolution:
         """Numerical IK for pose T (4x4, base frame) from q0; never a silent wrong q.
 
-        ``method="mink"`` (differential IK with restarts; Puma robots are also seeded from
-        the closed form) or ``"newton-gauss"`` (the thesis's solver). ``config`` restricts
-        a Puma solution to a configuration such as ``"lun"``.
+        ``method="mink"`` (differential IK with restarts; OPW and UR robots are also seeded
+        from the closed form) or ``"newton-gauss"`` (the thesis's solver). ``config``
+        restricts the solution of an OPW or UR robot to a configuration such as ``"lun"``.
         """
         from workcell.robots.ik_numeric import solve
 
@@ -408,68 +374,4 @@ class Robot:
         return sol.q
 
     def __repr__(self) -> str:
-        return f"Robot({self.name!r}, {self.dof} joints, {self.convention} DH)"
-
-
-def _linear_joint_terms(robot: Robot) -> tuple[Array, Array]:
-    """C0 (n, 16) and C1, C2 (n, 2, 16) with A_i = C0 + u C1 + v C2 (see Robot._joint_matrices).
-
-    Standard DH ``Rz(theta) Tz(d) Tx(a) Rx(alpha)``; modified ``Rx(alpha) Tx(a) Rz(theta) Tz(d)``.
-    """
-    n = robot.dof
-    C = np.zeros((n, 3, 4, 4))  # C0, C1, C2
-    for i, j in enumerate(robot.joints):
-        ca, sa, a = np.cos(j.alpha), np.sin(j.alpha), j.a
-        if j.kind == "revolute":
-            d = j.d
-            if robot.convention == "standard":
-                C[i, 0] = [[0, 0, 0, 0], [0, 0, 0, 0], [0, sa, ca, d], [0, 0, 0, 1]]
-                C[i, 1] = [[1, 0, 0, a], [0, ca, -sa, 0], [0, 0, 0, 0], [0, 0, 0, 0]]
-                C[i, 2] = [[0, -ca, sa, 0], [1, 0, 0, a], [0, 0, 0, 0], [0, 0, 0, 0]]
-            else:
-                C[i, 0] = [[0, 0, 0, a], [0, 0, -sa, -d * sa], [0, 0, ca, d * ca], [0, 0, 0, 1]]
-                C[i, 1] = [[1, 0, 0, 0], [0, ca, 0, 0], [0, sa, 0, 0], [0, 0, 0, 0]]
-                C[i, 2] = [[0, -1, 0, 0], [ca, 0, 0, 0], [sa, 0, 0, 0], [0, 0, 0, 0]]
-        else:  # prismatic: theta fixed, d = u enters linearly
-            ct, st = np.cos(j.theta), np.sin(j.theta)
-            if robot.convention == "standard":
-                C[i, 0] = [
-                    [ct, -st * ca, st * sa, a * ct],
-                    [st, ct * ca, -ct * sa, a * st],
-                    [0, sa, ca, 0],
-                    [0, 0, 0, 1],
-                ]
-                C[i, 1, 2, 3] = 1.0
-            else:
-                C[i, 0] = [
-                    [ct, -st, 0, a],
-                    [st * ca, ct * ca, -sa, 0],
-                    [st * sa, ct * sa, ca, 0],
-                    [0, 0, 0, 1],
-                ]
-                C[i, 1, 1, 3], C[i, 1, 2, 3] = -sa, ca
-    return C[:, 0].reshape(n, 16), C[:, 1:].reshape(n, 2, 16)
-
-
-def joints_from_table(
-    table: Sequence[Sequence[float]],
-    limits_deg: Sequence[tuple[float, float]],
-    *,
-    max_speed_deg: Sequence[float] | None = None,
-    names: Sequence[str] | None = None,
-) -> tuple[Joint, ...]:
-    """Revolute joints from rows (a m, d m, alpha deg, offset deg) and limits in degrees."""
-    out = []
-    for i, (a, d, alpha, off) in enumerate(table):
-        out.append(
-            Joint(
-                name=names[i] if names else f"j{i + 1}",
-                a=float(a),
-                d=float(d),
-                alpha=float(np.radians(alpha)),
-                offset=float(np.radians(off)),
-                limits=(float(np.radians(limits_deg[i][0])), float(np.radians(limits_deg[i][1]))),
-                max_speed=float(np.radians(max_speed_deg[i])) if max_speed_deg else float("inf"),
-            )
-        )
-    return tuple(out)
+        return f"Robot({self.name!r}, {self.dof} joints)"

@@ -1,21 +1,22 @@
 """Cartesian targets for the simulator: one pose to joints, and straight lines.
 
 :func:`solve_pose` turns a world tool pose into joint values for ``move_end_effector``:
-for the Puma family the closed form's in-limit solutions (of the requested configuration,
-if any), nearest to the current joints; otherwise :meth:`Robot.ik` from the current
-joints. It raises :class:`UnreachableError` with the reason (out of reach, outside the
+for robots with a closed-form family (OPW, UR) the in-limit solutions (of the requested
+configuration, if any), nearest to the current joints; otherwise :meth:`Robot.ik` from
+the current joints. It raises :class:`UnreachableError` with the reason (out of reach, outside the
 limits, configuration not available: the available ones are listed).
 
-:func:`line_waypoints` samples the straight line from the current tool pose to a target
-(thesis §4.5 ``move_straight_line``): positions evenly spaced at most ``step`` apart,
-orientation interpolated by slerp (held when start and target orientations agree), each
-sample solved by IK warm-started at the previous sample's joints (the Puma closed form's
-nearest in-limit solution of the start's arm and elbow configuration, or numerical IK
-from the previous q). A sample with no
-solution, or a joint that would jump more than ``max_jump`` between samples (a
-singularity on the way), makes the line impossible: :class:`UnreachableError` says at
-which fraction of the line, where, which joint and why. :func:`line_deviation` then
-measures how far the joint-interpolated frames stray from the line.
+:func:`path_joints` solves the samples of any Cartesian path (:mod:`workcell.sim.paths`),
+each by IK warm-started at the previous sample's joints (the closed form's nearest
+in-limit solution of the start's arm and elbow configuration, all samples at once, or
+numerical IK from the previous q). A sample with no solution, or a joint that would jump
+more than ``max_jump`` between samples (a singularity on the way), makes the path
+impossible: :class:`UnreachableError` says at which fraction of it, where, which joint
+and why. :func:`line_waypoints` does this for the straight line from the current tool
+pose to a target (thesis §4.5 ``move_straight_line``): positions evenly spaced at most
+``step`` apart, orientation interpolated by slerp (held when start and target
+orientations agree); :func:`line_deviation` then measures how far the joint-interpolated
+frames stray from the line.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from workcell.cell.workcell import RobotPlacement
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, KinematicsError, ProgramError, UnreachableError
-from workcell.robots.ik_closed import CONFIGS, puma_config, puma_ik_batch, puma_ik_report
+from workcell.robots.ik_closed import CONFIGS, config_of, ik_batch, ik_report
 from workcell.robots.robot import Robot
 from workcell.sim.cycle import command_record
 from workcell.sim.jerk import require_finite
@@ -57,7 +58,7 @@ def world_target(T: ArrayLike, command: str, robot: str) -> Array:
 
 
 def _closed_form(placement: RobotPlacement, Tb: Array, q: Array, config: str | None) -> Array:
-    sols, reason = puma_ik_report(placement.robot, Tb, q)
+    sols, reason = ik_report(placement.robot, Tb, q)
     ok = [s for s in sols if s.within_limits]
     if config is not None:
         have = sorted({s.config for s in ok if s.config})
@@ -82,7 +83,7 @@ def solve_pose(
     Nearest in the largest joint change, so the one a joint move reaches soonest
     (eq. 4.27's duration is proportional to it).
 
-    ``config``: Puma configuration letters to require (any of l|r, u|d, n|f, e.g. "ru").
+    ``config``: configuration letters to require (any of l|r, u|d, n|f, e.g. "ru").
     Raises UnreachableError with the reason.
     """
     if config is not None and (
@@ -97,7 +98,7 @@ def solve_pose(
 def _solve_base(placement: RobotPlacement, Tb: Array, q: Array, config: str | None) -> Array:
     """:func:`solve_pose` for a pose ``Tb`` in the robot's base frame."""
     robot = placement.robot
-    if robot.family == "puma":
+    if robot.ik_family is not None:
         return _closed_form(placement, Tb, q, config)
     sol = robot.ik(Tb, q, config=config)
     if not sol.success:
@@ -115,17 +116,17 @@ def path_joints(
     what: str = "line",
 ) -> Array:
     """Joint samples (k, dof) at world tool poses (k, 4, 4), each solved by IK warm-started
-    at the previous one (the Puma keeps its arm and elbow configuration: a switch is a
-    jump). Raises UnreachableError saying at which ``fractions`` (k,) of the ``what``
+    at the previous one (a closed-form arm keeps its shoulder and elbow configuration: a
+    switch is a jump). Raises UnreachableError saying at which ``fractions`` (k,) of the ``what``
     and where a sample is out of reach or a joint would jump more than ``max_jump``."""
     Tb = invert(placement.base) @ poses
     Q = np.empty((len(poses), len(q0)))
     prev = q0
     robot = placement.robot
-    keep = puma_config(robot, q0)[:2] if robot.family == "puma" else None
+    keep = config_of(robot, q0)[:2] if robot.ik_family is not None else None
     start = 0
     if keep is not None:  # the closed form for every sample at once, then one by one
-        start, prev = _puma_samples(robot, Tb, q0, keep, Q, max_jump)
+        start, prev = _closed_form_samples(robot, Tb, q0, keep, Q, max_jump)
     for k in range(start, len(poses)):
         try:
             q = _solve_base(placement, Tb[k], prev, keep)
@@ -144,14 +145,14 @@ def path_joints(
     return Q
 
 
-def _puma_samples(
+def _closed_form_samples(
     robot: Robot, Tb: Array, q0: Array, keep: str, Q: Array, max_jump: float
 ) -> tuple[int, Array]:
-    """Fill Q with the Puma closed form's solutions of arm and elbow configuration
+    """Fill Q with the closed form's solutions of shoulder and elbow configuration
     ``keep``, each the in-limit 2 pi-equivalent nearest the previous sample (as
     :func:`_solve_base` picks them), vectorised over the poses; stops at the first sample
     without one or with a joint jump over ``max_jump``. Returns (samples done, last q)."""
-    S, valid = puma_ik_batch(robot, Tb, q0)
+    S, valid = ik_batch(robot, Tb, q0)
     slots = [i for i, c in enumerate(CONFIGS) if c.startswith(keep)]
     prev = q0
     for k in range(len(Tb)):
@@ -218,7 +219,7 @@ class CartesianCommands:
     ) -> None:
         """Move the tool to the world pose ``T`` (4x4, m): IK, then a joint move.
 
-        ``config``: Puma configuration letters to require (e.g. "ru"); default: the
+        ``config``: configuration letters to require (e.g. "ru"); default: the
         in-limit solution nearest the current joints. ``zone`` (m): blend into the next
         move. Raises UnreachableError saying why.
         """

@@ -148,7 +148,7 @@ class ConcurrentCommands:
                 "move",
                 f"{mv.command} {mv.detail}: {len(mv.times)} frames, "
                 f"{mv.times[-1] - self._block_start(mv, block):.6g} s (concurrent)",
-                mv.record,
+                data=mv.record,
             )
 
     def _block_start(self: Simulator, mv: PlannedMove, block: _Block) -> float:

@@ -138,7 +138,7 @@ class GripperCommands:
                 "grasp",
                 f"grasp '{part}': axis {math.degrees(chosen.angle):.3g} deg, width "
                 f"{chosen.width * 1e3:.4g} mm, distance {chosen.distance * 1e3:.3g} mm",
-                command_record(name, "close_gripper", self.sim_time, 0.0),
+                data=command_record(name, "close_gripper", self.sim_time, 0.0),
             )
         return part
 
@@ -175,7 +175,7 @@ class GripperCommands:
             rec = command_record(name, "open_gripper", self.sim_time, 0.0)
             if hold is None:
                 self.timeline.add_event(
-                    self.sim_time, name, "open", "open_gripper: nothing held", rec
+                    self.sim_time, name, "open", "open_gripper: nothing held", data=rec
                 )
             else:
                 others = self._holders[hold.part]
@@ -184,7 +184,11 @@ class GripperCommands:
                     f"{round(v, 4) + 0.0:.4f}" for v in self.part_pose(hold.part)[:3, 3]
                 )
                 self.timeline.add_event(
-                    self.sim_time, name, "release", f"release '{hold.part}' at ({where}) m{to}", rec
+                    self.sim_time,
+                    name,
+                    "release",
+                    f"release '{hold.part}' at ({where}) m{to}",
+                    data=rec,
                 )
         return None if hold is None else hold.part
 

@@ -234,7 +234,7 @@ class MotionRunner:
                 name,
                 "move",
                 f"{command} {detail}: {k} frames, {self.sim_time - t_before:.6g} s",
-                record,
+                data=record,
             )
 
     def _emit_rows(
@@ -291,7 +291,7 @@ class MotionRunner:
                         name, b.a_times, lambda lo, hi: b.a_rows[lo:hi], carried, p.command
                     )
                 tl.add_event(
-                    b.a_end, name, "move", f"{a_detail}: {b.a_end - p.t_start:.6g} s", a_rec
+                    b.a_end, name, "move", f"{a_detail}: {b.a_end - p.t_start:.6g} s", data=a_rec
                 )
                 first = len(tl)
                 self._emit_rows(name, b.b_times, lambda lo, hi: b.b_rows[lo:hi], carried, command)
@@ -300,7 +300,7 @@ class MotionRunner:
                     name,
                     "move",
                     f"{b_detail}: {len(b.b_times)} frames, {b_dur:.6g} s",
-                    b_rec,
+                    data=b_rec,
                 )
             except BaseException:
                 tl.truncate(TimelineMark(cut, e_cut))
@@ -346,7 +346,7 @@ def _restore(tl: Any, cut: int, saved: tuple[Array, Array, Array, tuple]) -> Non
                 times[at - cut : upto - cut], walls[at - cut : upto - cut], Q[at - cut : upto - cut]
             )
             at = upto
-        tl.add_event(e.t, e.robot, e.kind, e.detail, e.data)
+        tl.add_event(e.t, e.robot, e.kind, e.detail, frame=e.frame, data=e.data)
     if at - cut < len(times):
         tl.extend(times[at - cut :], walls[at - cut :], Q[at - cut :])
 

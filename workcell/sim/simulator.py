@@ -353,7 +353,7 @@ class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCo
                 self.sim_time += s
                 self._wall += time.perf_counter() - c0
             rec = command_record(None, "wait", self.sim_time - s, s, "wait")
-            self.timeline.add_event(self.sim_time, None, "wait", f"wait {s:.6g} s", rec)
+            self.timeline.add_event(self.sim_time, None, "wait", f"wait {s:.6g} s", data=rec)
 
     def log_error(self, exc: BaseException, robot: str | None = None) -> None:
         """Note on the timeline that the program stopped on ``exc``: an ``error`` event
@@ -442,6 +442,7 @@ class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCo
         w0 = self._wall
         c0 = clock()
         check = self.check_collisions
+        first = len(self.timeline)  # frame j of this batch becomes timeline frame first + j
         if self.mode == "playback" and not carried and not check:
             walls = np.full(k, clock())
             d.qpos[:] = Q[-1]
@@ -470,16 +471,23 @@ class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCo
                     collide(m, d)
                     if d.ncon or self._touching:
                         pens = self.contacts.penetrations(d)
-                        self._contact_events(float(times[j]), pens, mover=mover)
+                        self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
                 walls[j] = clock()
         self.timeline.extend(times, w0 + (walls - c0), Q)
         self.sim_time = float(times[-1])
         self._wall = w0 + (clock() - c0)
 
     def _contact_events(
-        self, t: float, pens: list[Penetration], *, stop: bool = True, mover: str | None = None
+        self,
+        t: float,
+        pens: list[Penetration],
+        *,
+        stop: bool = True,
+        mover: str | None = None,
+        frame: int = 0,
     ) -> None:
-        """Log the pairs that start overlapping at ``t``; raise if stopping on collisions."""
+        """Log the pairs that start overlapping at ``t`` in timeline ``frame`` (the colliding
+        frame, which the event carries); raise if stopping on collisions."""
         if not pens and not self._touching:
             return
         now = {(a, b) for a, b, _ in pens}
@@ -490,7 +498,7 @@ class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCo
             involved = [self.contacts.robot_of(x) or holder.get(x) for x in (a, b)]
             robot = mover if mover in involved else (involved[0] or involved[1])
             detail = f"{a} with {b}: depth {depth * 1e3:.3g} mm"
-            self.timeline.add_event(t, robot, "collision", detail)
+            self.timeline.add_event(t, robot, "collision", detail, frame=frame)
             if stop and self.stop_on_collision:
                 raise CollisionError(f"collision at t = {t:.6g} s: {detail}")
 

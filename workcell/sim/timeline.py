@@ -39,9 +39,10 @@ Array = NDArray[np.float64]
 class Event(NamedTuple):
     """Something that happened at simulated time ``t`` (s): ``robot`` (None: the whole
     cell), ``kind`` ("move", "wait", "grasp", "release", "collision", "error", ...), a
-    human-readable ``detail``, and ``frame``: the last frame on the timeline when it was
-    recorded (the frame showing its result; several frames may share one time); ``data``:
-    the command's cycle-time record, for the events that end a command (see
+    human-readable ``detail``, and ``frame``: the frame showing it (for a command, the last
+    frame on the timeline when it was recorded, its result; for a collision, the first
+    frame in which the pair overlaps; several frames may share one time); ``data``: the
+    command's cycle-time record, for the events that end a command (see
     :mod:`workcell.sim.cycle`), else None."""
 
     t: float
@@ -271,10 +272,15 @@ class Timeline:
         robot: str | None,
         kind: str,
         detail: str = "",
+        frame: int | None = None,
         data: dict[str, Any] | None = None,
     ) -> Event:
-        """Record an event (``data``: its command record) and return it."""
-        e = Event(float(t), robot, str(kind), str(detail), self._n - 1, data)
+        """Record an event and return it; its ``frame`` defaults to the last frame so far
+        (give it for an event that belongs to a frame about to be added, e.g. a collision
+        found while a batch of frames is computed); ``data``: its command record."""
+        e = Event(
+            float(t), robot, str(kind), str(detail), self._n - 1 if frame is None else frame, data
+        )
         self._events.append(e)
         return e
 

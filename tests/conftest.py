@@ -1,0 +1,68 @@
+"""The whole suite runs in its own temporary folder and must leave nothing behind.
+
+Before the session starts, ``TMPDIR`` (and :mod:`tempfile`'s cached choice) point to a
+fresh folder, so everything the tests and the code under test put in "the system's
+temporary folder" (spill files, kernel connection files, subprocesses' files) lands
+there; pytest's own ``tmp_path`` folders live there too. When the session ends, anything
+else still in that folder is a leak: the session fails and lists it. The folder is then
+removed, so a run leaves nothing in /tmp. (xdist workers inherit the folder.)
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import pytest
+
+from workcell.decompose import CACHE_ENV
+
+_KEY = "WORKCELL_TEST_TMPDIR"
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if hasattr(config, "workerinput"):  # an xdist worker: the controller set TMPDIR
+        tempfile.tempdir = os.environ.get("TMPDIR") or None
+        return
+    folder = tempfile.mkdtemp(prefix="workcell-tests-")
+    os.environ["TMPDIR"] = folder
+    os.environ[_KEY] = folder
+    tempfile.tempdir = folder
+
+
+def leftovers(folder: Path) -> list[str]:
+    """What is in ``folder`` besides pytest's own ``pytest-of-*`` folders."""
+    return sorted(p.name for p in folder.iterdir() if not p.name.startswith("pytest-of-"))
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    if hasattr(session.config, "workerinput") or not os.environ.get(_KEY):
+        return
+    folder = Path(os.environ.pop(_KEY))
+    left = leftovers(folder) if folder.is_dir() else []
+    shutil.rmtree(folder, ignore_errors=True)
+    if left:
+        reporter = session.config.pluginmanager.get_plugin("terminalreporter")
+        message = (
+            f"the test session left {len(left)} file(s) in the temporary folder: "
+            f"{', '.join(left[:20])}"
+        )
+        if reporter is not None:
+            reporter.ensure_newline()
+            reporter.write_line(f"ERROR: {message}", red=True)
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _coacd_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Convex decompositions go to a temporary cache, never the user's (one per worker)."""
+    old = os.environ.get(CACHE_ENV)
+    os.environ[CACHE_ENV] = str(tmp_path_factory.mktemp("coacd"))
+    yield
+    if old is None:
+        del os.environ[CACHE_ENV]
+    else:
+        os.environ[CACHE_ENV] = old

@@ -1,0 +1,210 @@
+"""A local pool of worker processes that streams rows back and survives worker crashes.
+
+Each worker is a fork of a *fork server*: a fresh, single-threaded Python process that
+imports the simulator once, so a new worker (at the start, or after a crash) is ready in
+milliseconds and inherits nothing of the parent's state, threads or locks (``spawn``
+where there is no fork server). Workers run with one thread for numpy's and OpenMP's
+pools and ignore SIGINT (Ctrl-C is the parent's to handle). It receives the study's setup once,
+compiles the cell, then evaluates batches of candidates, sending each row back as soon
+as it is done. The parent hands a batch to each idle worker and waits on every worker's
+pipe and process at once.
+
+When a worker dies (a crash in native code, ``os._exit``, the OOM killer), the candidate
+it was on is known exactly: the first of its batch without a row. That candidate goes
+back to the front of the queue and is retried (on a new worker) up to ``retries`` times,
+then gets an error row (``WorkerCrashed``); the rest of the batch goes back to the queue
+untouched, and a new worker takes the dead one's place. Workers that die before they
+are ready (a broken setup) stop the study with a StudyError after a few attempts.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import multiprocessing as mp
+import os
+import pickle
+import signal
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection, wait
+from typing import Any
+
+from workcell.errors import StudyError
+
+__all__ = ["CRASH_MESSAGE", "ProcessPool", "peak_rss_mb", "stop_fork_server"]
+
+CRASH_MESSAGE = "a worker process died while evaluating this candidate; retried {} time(s)"
+_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+_MAX_START_FAILURES = 3
+
+
+def peak_rss_mb() -> float:
+    """This process's peak resident memory (MB)."""
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _worker(conn: Connection, setup_bytes: bytes, environ: dict[str, str]) -> None:
+    """A worker's life: set up, then evaluate batches until told to stop (module doc).
+
+    ``environ``: the parent's environment when it started the worker (a fork server's
+    children would otherwise see the environment of when the fork server started)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    os.environ.clear()
+    os.environ.update(environ)
+    from workcell.study.evaluation import evaluator
+
+    ev = evaluator(pickle.loads(setup_bytes))
+    ev.template({})  # compile the cell before the first batch
+    conn.send(("ready", os.getpid(), peak_rss_mb()))
+    while True:
+        try:
+            batch = conn.recv()
+        except EOFError:  # the parent is gone
+            return
+        if batch is None:
+            return
+        for candidate in batch:
+            conn.send(("row", ev.evaluate(candidate)))
+        conn.send(("idle", os.getpid(), peak_rss_mb()))
+
+
+@contextlib.contextmanager
+def _single_threaded() -> Iterator[None]:
+    """Environment of the processes started in the block: one thread per numeric pool."""
+    saved = {k: os.environ.get(k) for k in _THREAD_VARS}
+    os.environ.update(dict.fromkeys(_THREAD_VARS, "1"))
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def stop_fork_server() -> None:
+    """Stop this process's fork server and remove its socket folder (``pymp-*`` in the
+    temporary folder), which Python otherwise keeps until the process exits; the next
+    pool starts a new one. For long-lived processes that want them gone (test suites)."""
+    import multiprocessing.forkserver
+    import multiprocessing.util
+
+    multiprocessing.forkserver._forkserver._stop()  # as Python's own tests stop it
+    for finalizer in list(multiprocessing.util._finalizer_registry.values()):
+        if finalizer._callback is multiprocessing.util._remove_temp_dir:
+            finalizer()  # what would run at exit: remove the folder, forget it
+
+
+def _context() -> Any:
+    """The fork server's context (preloading the simulator), else spawn's."""
+    if "forkserver" in mp.get_all_start_methods():
+        ctx = mp.get_context("forkserver")
+        ctx.set_forkserver_preload(["workcell.study.evaluation"])
+        return ctx
+    return mp.get_context("spawn")
+
+
+@dataclass
+class _Worker:
+    process: Any
+    conn: Connection
+    ready: bool = False
+    inflight: collections.deque = field(default_factory=collections.deque)
+
+
+class ProcessPool:
+    """``workers`` processes evaluating ``setup``'s candidates in batches of ``batch_size``
+    (module doc); ``retries``: how often a candidate that kills its worker is retried."""
+
+    def __init__(self, setup: Any, workers: int, batch_size: int, retries: int) -> None:
+        self.setup = setup
+        self.setup_bytes = pickle.dumps(setup)
+        self.workers = workers
+        self.batch_size = batch_size
+        self.retries = retries
+        self.memory_mb: dict[int, float] = {}  # worker pid -> peak resident memory
+        self.crashes = 0
+        self._ctx = _context()
+
+    def _start(self) -> _Worker:
+        parent, child = self._ctx.Pipe(duplex=True)
+        with _single_threaded():
+            env = dict(os.environ)
+            p = self._ctx.Process(target=_worker, args=(child, self.setup_bytes, env), daemon=True)
+            p.start()
+        child.close()
+        return _Worker(p, parent)
+
+    def run(self, todo: list[Any]) -> Iterator[dict[str, Any]]:
+        """A row per candidate of ``todo``, as they finish (any order)."""
+        from workcell.study.evaluation import error_row
+
+        queue = collections.deque(todo)
+        attempts: collections.Counter[int] = collections.Counter()
+        start_failures = 0
+        pool = [self._start() for _ in range(min(self.workers, len(queue)))]
+        try:
+            while queue or any(w.inflight for w in pool):
+                for w in pool:
+                    if w.ready and not w.inflight and queue:
+                        batch = [queue.popleft() for _ in range(min(self.batch_size, len(queue)))]
+                        w.inflight.extend(batch)
+                        w.conn.send(batch)
+                by_conn = {w.conn: w for w in pool}
+                by_sentinel = {w.process.sentinel: w for w in pool}
+                dead: list[_Worker] = []
+                for obj in wait([*by_conn, *by_sentinel]):
+                    w = by_conn.get(obj) or by_sentinel[obj]
+                    if w in dead:
+                        continue
+                    try:
+                        while w.conn.poll():
+                            kind, *rest = w.conn.recv()
+                            if kind == "row":
+                                w.inflight.popleft()
+                                yield rest[0]
+                            else:  # "ready" or "idle"
+                                w.ready = True
+                                self.memory_mb[rest[0]] = rest[1]
+                    except (EOFError, OSError):
+                        dead.append(w)
+                        continue
+                    if obj is w.process.sentinel:
+                        dead.append(w)
+                for w in dead:
+                    pool.remove(w)
+                    w.process.join()
+                    w.conn.close()
+                    if not w.ready:
+                        start_failures += 1
+                        if start_failures > _MAX_START_FAILURES:
+                            raise StudyError(
+                                f"worker processes die before they start (exit code "
+                                f"{w.process.exitcode}); run with backend 'serial' to see why"
+                            )
+                    if w.inflight:
+                        self.crashes += 1
+                        suspect = w.inflight.popleft()
+                        queue.extendleft(reversed(w.inflight))
+                        attempts[suspect.id] += 1
+                        if attempts[suspect.id] > self.retries:
+                            msg = CRASH_MESSAGE.format(self.retries)
+                            yield error_row(self.setup, suspect, "WorkerCrashed", msg)
+                        else:
+                            queue.appendleft(suspect)
+                    if queue and len(pool) < self.workers:
+                        pool.append(self._start())
+        finally:
+            for w in pool:
+                with contextlib.suppress(OSError, BrokenPipeError):
+                    w.conn.send(None)
+            for w in pool:
+                w.process.join(timeout=5)
+                if w.process.is_alive():
+                    w.process.terminate()
+                    w.process.join()
+                w.conn.close()
