@@ -13,6 +13,7 @@ from motion_helpers import (
     SPEED,
     derivatives,
     make,
+    pose,
     seven_phase_time,
 )
 
@@ -136,3 +137,15 @@ def test_joint_by_joint_mode_moves_each_joint_in_its_own_minimum_time():
         for x, v, a, j in zip(d, SPEED, ACCELERATION, JERK, strict=True)
     )
     assert sim.sim_time == pytest.approx(expected, rel=1e-9)
+
+
+def test_the_work_budget_refuses_a_move_of_too_many_frames_before_it_runs():
+    from workcell import LimitError, limits
+
+    sim = make(profile="jerk", dt=0.001)
+    with limits.using(max_frames_per_command=100), pytest.raises(LimitError, match="move_joints"):
+        sim.move_joints_relative("puma", np.radians([90.0, 0, 0, 0, 0, 0]))
+    assert (sim.frames, sim.sim_time) == (1, 0.0)
+    sim.move_end_effector("puma", pose(), config="ru")
+    with limits.using(max_frames_per_command=100), pytest.raises(LimitError, match="move_linear"):
+        sim.move_linear("puma", pose((0.0, 0.1, 0.0)), speed=0.2)

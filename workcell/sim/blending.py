@@ -41,7 +41,7 @@ from workcell.errors import ProgramError
 from workcell.sim.cartesian import path_joints
 from workcell.sim.jerk import Limits, plan_jerk
 from workcell.sim.paths import CartesianPath, blend_paths
-from workcell.sim.planning import Motion
+from workcell.sim.planning import Motion, frames_of
 from workcell.sim.profiles import step_times
 from workcell.sim.timeline import TimelineMark
 from workcell.sim.timing import PathMotion, sample_params, time_path
@@ -274,7 +274,7 @@ def path_blend(
     )
     if new is None:
         return None
-    t = step_times(new.duration, dt)
+    t = frames_of(new.duration, dt, command)
     rows = new.positions(t) if len(t) else np.empty((0, len(q_anchor)))
     if len(t):
         rows[-1] = Q[-1]

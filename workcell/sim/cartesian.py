@@ -269,7 +269,10 @@ class CartesianCommands:
             )
         except UnreachableError as exc:
             raise UnreachableError(f"{command} '{name}': {exc}") from exc
-        motion = plan_waypoints(q0, Qw, speed=self.speed(name) * self._override[name], dt=self.dt)
+        motion = plan_waypoints(
+            q0, Qw, speed=self.speed(name) * self._override[name], dt=self.dt,
+            what=f"{command} '{name}'",
+        )  # fmt: skip
         t0 = self._start_time(name)
         dev, i = line_deviation(placement, motion.rows, start[:3, 3], target[:3, 3])
         if dev > self.line_tolerance:

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
+from workcell import limits as work_limits
 from workcell.checks import is_finite_number
 from workcell.errors import JointLimitError, ProgramError, UnreachableError
 from workcell.sim.blending import Blend, Pending, joint_blend, path_blend, tool_lengths
@@ -23,8 +24,7 @@ from workcell.sim.cartesian import path_joints
 from workcell.sim.cycle import command_record
 from workcell.sim.jerk import Limits, joint_limits, require_finite
 from workcell.sim.paths import CartesianPath
-from workcell.sim.planning import Motion, Rows, plan_move
-from workcell.sim.profiles import step_times
+from workcell.sim.planning import Motion, Rows, frames_of, plan_move
 from workcell.sim.timeline import TimelineMark
 from workcell.sim.timing import PathMotion, sample_params, time_path
 from workcell.spatial import invert
@@ -80,6 +80,7 @@ class MotionRunner:
             profile=self.profile,
             acceleration=self.acceleration * f * f,
             limits=limits,
+            what=f"{command} '{name}'",
         )
 
     def _move(self: Simulator, name: str, target: Array, command: str, zone: float = 0.0) -> None:
@@ -141,7 +142,7 @@ class MotionRunner:
             )  # fmt: skip
             if law is None:  # from rest to rest a time law always exists
                 raise UnreachableError("no time law along the path")
-            t = step_times(law.duration, self.dt)
+            t = frames_of(law.duration, self.dt, f"{command} '{name}'")
             motion = Motion(t, _law_rows(law, t, Q[-1]), law.activity(), law)
             blend = None
             if pend is not None:
@@ -224,6 +225,8 @@ class MotionRunner:
             self._defer(name, times, Qr, command, detail, record)
             return
         k = len(times)
+        if k:  # before any work: the command's frames and its clock
+            self._budget(name, command, k, float(times[-1]))
         carried = self._carried(name) if k else []
         rows = Qr if callable(Qr) else (lambda lo, hi: Qr[lo:hi])
         t_before = self.sim_time
@@ -236,6 +239,11 @@ class MotionRunner:
                 f"{command} {detail}: {k} frames, {self.sim_time - t_before:.6g} s",
                 data=record,
             )
+
+    def _budget(self: Simulator, name: str, command: str, frames: int, end: float) -> None:
+        """LimitError when a command's frames or its end time (s) are over the budget."""
+        work_limits.check("max_frames_per_command", frames, f"{command} '{name}'")
+        work_limits.check("max_sim_time", end, f"{command} '{name}': the clock")
 
     def _emit_rows(
         self: Simulator, name: str, times: Array, rows: Any, carried: list, command: str
@@ -266,6 +274,8 @@ class MotionRunner:
         b_rec = command_record(name, command, b.a_end, b_dur, b.b_activity)
         a_detail = f"{p.command} {p.detail}, blended into {command} (zone {b.zone * 1e3:.4g} mm)"
         b_detail = f"{command} {detail}, out of a {b.zone * 1e3:.4g} mm zone"
+        if len(b.b_times):
+            self._budget(name, command, len(b.a_times) + len(b.b_times), float(b.b_times[-1]))
         if self._block is not None:
             return self._blend_in_block(name, p, b, command, detail, a_rec, b_rec)
         cut = p.first + b.keep  # frames [0, cut) stay

@@ -22,6 +22,7 @@ the robot's speed (a straight line's samples, the thesis's timing).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -29,11 +30,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell import limits as work_limits
 from workcell.sim import profiles
 from workcell.sim.jerk import Limits, plan_jerk
 from workcell.sim.profiles import step_times
 
-__all__ = ["Motion", "Rows", "plan_move", "plan_waypoints"]
+__all__ = ["Motion", "Rows", "frames_of", "plan_move", "plan_waypoints"]
 
 Array = NDArray[np.float64]
 Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, hi)
@@ -62,6 +64,13 @@ class Motion:
         return self.rows(lo, hi) if callable(self.rows) else np.asarray(self.rows[lo:hi])
 
 
+def frames_of(duration: float, dt: float, what: str) -> Array:
+    """The sample times of a motion of ``duration`` (s) every ``dt`` (s), after checking
+    the work budget (``max_frames_per_command``) before they are made."""
+    work_limits.check("max_frames_per_command", math.ceil(duration / dt), what)
+    return step_times(duration, dt)
+
+
 def _sampled(law: Any, t: Array, target: Array) -> Rows:
     """Rows of a law at times t, built on demand, the last one exactly ``target``."""
     last = len(t) - 1
@@ -86,10 +95,12 @@ def plan_move(
     profile: str = "linear",
     acceleration: float = 2.0,
     limits: Limits | None = None,
+    what: str = "move",
 ) -> Motion:
     """One move from ``q0`` to ``target`` (module doc) at ``speed`` (rad/s, the joint that
     moves most; thesis profiles) or within ``limits`` (profile "jerk"), sampled every
-    ``dt`` (s). No motion gives no frames."""
+    ``dt`` (s). No motion gives no frames; more than the work budget's frames per
+    command raise LimitError naming ``what``."""
     delta = target - q0
     big = float(np.max(np.abs(delta))) if len(delta) else 0.0
     if big == 0.0:
@@ -98,10 +109,10 @@ def plan_move(
     if not joint_by_joint:  # path and playback: eq. 4.27, 4.28
         if jerk:
             law = plan_jerk(q0, target, limits)  # type: ignore[arg-type]
-            t = step_times(law.duration, dt)
+            t = frames_of(law.duration, dt, what)
             return Motion(t, _sampled(law, t, target), law.activity(), law)
         T = profiles.duration(profile, big, speed, acceleration)
-        t = step_times(T, dt)
+        t = frames_of(T, dt, what)
         s = profiles.progress(profile, t, T, big, speed, acceleration)
         last = len(t) - 1
 
@@ -134,6 +145,8 @@ def plan_move(
     times, out, activity = [], [], {}
     q = q0.copy()
     now = 0.0
+    total = sum(shapes[i][0] for i in moving)
+    work_limits.check("max_frames_per_command", math.ceil(total / dt) + len(moving), what)
     for i in moving:
         Ti, at, act = shapes[i]
         t = step_times(Ti, dt)
@@ -152,9 +165,16 @@ def plan_move(
     return Motion(np.concatenate(times), np.concatenate(out), activity)
 
 
-def plan_waypoints(q0: Array, waypoints: Array, *, speed: float, dt: float) -> Motion:
+def plan_waypoints(
+    q0: Array, waypoints: Array, *, speed: float, dt: float, what: str = "move"
+) -> Motion:
     """Path-mode frames from ``q0`` through joint ``waypoints`` (k, dof), linear in joints
     between them, each segment taking max |dq| / ``speed`` (s)."""
+    steps = (
+        np.abs(np.diff(np.vstack([q0, waypoints]), axis=0)).max(axis=1) if len(waypoints) else []
+    )
+    total = float(np.sum(steps)) / speed
+    work_limits.check("max_frames_per_command", math.ceil(total / dt) + len(waypoints), what)
     times, rows = [np.empty(0)], [np.empty((0, len(q0)))]
     now, prev = 0.0, q0
     for q in waypoints:
