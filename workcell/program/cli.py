@@ -59,6 +59,10 @@ def _run(args: argparse.Namespace) -> int:
             _outputs(args, session.sim)
         raise
     _outputs(args, session.sim)
+    if args.cycle_time and session.sim is not None:
+        from workcell.sim.cycle import format_table
+
+        print(format_table(session.sim.cycle_time()))
     if args.summary and session.sim is not None:
         import json
 
@@ -157,6 +161,12 @@ def register(sub: Any) -> None:
     run.add_argument("--echo", action="store_true", help="print each command before its output")
     run.add_argument(
         "--summary", action="store_true", help="print the simulation's summary as JSON at the end"
+    )
+    run.add_argument(
+        "--cycle-time",
+        action="store_true",
+        help="print the cycle-time table at the end: each command's start, duration and the "
+        "limit that set it",
     )
     run.add_argument("--save", metavar="FILE.rrd", help="record the run (also up to an error)")
     run.add_argument("--render", metavar="FILE.png", help="a contact sheet of the run's key frames")

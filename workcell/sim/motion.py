@@ -133,7 +133,9 @@ class MotionCommands(MotionRunner):
         p_via = _via_point(via, name)
         v, a, z = self._tool_args(command, name, speed, acceleration, zone)
         start = self.tool_pose(name)
-        arc = arc_through(start[:3, 3], p_via, target[:3, 3], start[:3, :3], target[:3, :3])
+        arc = arc_through(
+            start[:3, 3], p_via, target[:3, 3], start[:3, :3], target[:3, :3], f"{command} '{name}'"
+        )
         detail = f"{arc.length * 1e3:.4g} mm arc (radius {arc.radius * 1e3:.4g} mm) at {v * 1e3:.4g} mm/s"
         self._path_move(name, command, detail, CartesianPath([arc]), v, a, z)
 

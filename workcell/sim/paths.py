@@ -153,15 +153,18 @@ class Arc(Piece):
         return np.outer(-np.sin(th), self.e1) + np.outer(np.cos(th), self.e2)
 
 
-def arc_through(p0: Array, via: Array, p1: Array, R0: Array, R1: Array) -> Arc:
-    """The arc from p0 through ``via`` to p1 (m). ProgramError when the three points are
-    collinear or two of them coincide (no circle passes through them)."""
+def arc_through(
+    p0: Array, via: Array, p1: Array, R0: Array, R1: Array, what: str = "move_circular"
+) -> Arc:
+    """The arc from p0 through ``via`` to p1 (m). ProgramError (its message starting with
+    ``what``) when the three points are collinear or two of them coincide (no circle
+    passes through them)."""
     a, b = via - p0, p1 - p0
     n = np.cross(a, b)
     scale = max(float(np.linalg.norm(a)), float(np.linalg.norm(b)), 1e-300)
     if np.linalg.norm(n) <= 1e-9 * scale * scale:
         raise ProgramError(
-            "move_circular: the start, via and end points are collinear (or two coincide): "
+            f"{what}: the start, via and end points are collinear (or two coincide): "
             f"start ({_fmt(p0)}), via ({_fmt(via)}), end ({_fmt(p1)}) m; a circle needs "
             "three points not on one line"
         )
