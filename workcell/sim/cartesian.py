@@ -145,29 +145,76 @@ def path_joints(
     return Q
 
 
+def _nearest_equivalents(robot: Robot, C: Array, near: Array) -> tuple[Array, Array]:
+    """:meth:`Robot.wrap_batch` of candidates C (..., n) near ``near`` (..., n), written
+    out for speed: the in-limit 2 pi-equivalent of each revolute joint nearest ``near``
+    (prismatic joints as they are); and whether every joint has one."""
+    two_pi = 2.0 * math.pi
+    turns = C / two_pi
+    k_lo = np.ceil(robot.lower / two_pi - 1e-12 - turns)
+    k_hi = np.floor(robot.upper / two_pi + 1e-12 - turns)
+    k = np.clip(np.rint((near - C) / two_pi), k_lo, k_hi)
+    rev = robot.revolute
+    W = np.where(rev, np.clip(C + two_pi * k, robot.lower, robot.upper), C)
+    inside = (robot.lower - 1e-12 <= C) & (robot.upper + 1e-12 >= C)
+    ok = np.where(rev, k_lo <= k_hi, inside).all(axis=-1)
+    return W, ok
+
+
 def _closed_form_samples(
     robot: Robot, Tb: Array, q0: Array, keep: str, Q: Array, max_jump: float
 ) -> tuple[int, Array]:
     """Fill Q with the closed form's solutions of shoulder and elbow configuration
     ``keep``, each the in-limit 2 pi-equivalent nearest the previous sample (as
-    :func:`_solve_base` picks them), vectorised over the poses; stops at the first sample
-    without one or with a joint jump over ``max_jump``. Returns (samples done, last q)."""
+    :func:`_solve_base` picks them). Vectorised: one configuration followed along the
+    whole path, kept when at every sample it is the nearest; else sample by sample.
+    Stops at the first sample without a solution or with a joint jump over ``max_jump``.
+    Returns (samples done, last q)."""
     S, valid = ik_batch(robot, Tb, q0)
     slots = [i for i, c in enumerate(CONFIGS) if c.startswith(keep)]
+    C, V = S[:, slots], valid[:, slots]
+    for i in range(len(slots)):
+        if not V[:, i].all():
+            continue
+        U = _follow(robot, q0, C[:, i])
+        if U is None:
+            continue
+        prev = np.vstack([q0[None, :], U[:-1]])
+        far = np.abs(U - prev).max(axis=1)
+        if far.max() > max_jump:
+            continue
+        nearest = True
+        for j in range(len(slots)):
+            if j != i:
+                W, ok = _nearest_equivalents(robot, np.nan_to_num(C[:, j]), prev)
+                other = np.where(V[:, j] & ok, np.abs(W - prev).max(axis=1), np.inf)
+                nearest &= bool(np.all(far <= other))
+        if nearest:
+            Q[:] = U
+            return len(Tb), U[-1]
     prev = q0
-    for k in range(len(Tb)):
-        best, far = None, math.inf
-        for i in slots:
-            if not valid[k, i]:
-                continue
-            W, ok = robot.wrap_batch(S[k, i], prev)
-            d = float(np.abs(W - prev).max())
-            if ok.all() and d < far:
-                best, far = W, d
-        if best is None or far > max_jump:
+    for k in range(len(Tb)):  # one by one (the configuration changes on the way)
+        W, ok = _nearest_equivalents(robot, np.nan_to_num(C[k]), prev)
+        d = np.where(V[k] & ok, np.abs(W - prev).max(axis=1), np.inf)
+        best = int(np.argmin(d))
+        if not np.isfinite(d[best]) or d[best] > max_jump:
             return k, prev
-        Q[k] = prev = best
+        Q[k] = prev = W[best]
     return len(Tb), prev
+
+
+def _follow(robot: Robot, q0: Array, C: Array) -> Array | None:
+    """Solutions C (k, n) made continuous from q0 (each the 2 pi-equivalent nearest the
+    one before), or None when one leaves the limits."""
+    W, ok = _nearest_equivalents(robot, C, q0)  # nearest q0 first, then fix the drift
+    if not ok.all():
+        return None
+    two_pi = 2.0 * math.pi
+    d = np.diff(np.vstack([q0[None, :], W]), axis=0)
+    drift = np.cumsum(two_pi * np.rint(d / two_pi), axis=0)  # whole turns crossed so far
+    U = np.where(robot.revolute, W - drift, W)
+    lo, hi = robot.lower - 1e-12, robot.upper + 1e-12
+    return U if np.all((lo <= U) & (hi >= U)) else None
 
 
 def _where(fraction: float, pose: Array, what: str) -> str:

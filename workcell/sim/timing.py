@@ -24,6 +24,7 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 from dataclasses import dataclass
@@ -246,14 +247,40 @@ def _toppra() -> Any:
     return toppra
 
 
+@functools.cache
+def _joint_constraints(v: tuple[float, ...], a: tuple[float, ...]) -> tuple[Any, Any]:
+    """toppra's joint speed and acceleration constraints for bounds v, a (cached: making
+    them prints the bounds into a description, ~1 ms)."""
+    from toppra import constraint
+
+    va, aa = np.array(v), np.array(a)
+    return (
+        constraint.JointVelocityConstraint(np.stack([-va, va], axis=1)),
+        constraint.JointAccelerationConstraint(
+            np.stack([-aa, aa], axis=1),
+            discretization_scheme=constraint.DiscretizationType.Interpolation,
+        ),
+    )
+
+
 def _tool_constraint(speed: Array, acceleration: Array) -> Any:
     """A toppra constraint on the path's last coordinate, the tool-point arc length l(s):
     ``|l' s_dot| <= speed`` and ``|l' s_ddot + l'' s_dot^2| <= acceleration``, both given
     per gridpoint (the programmed values, which change across a blend)."""
+    c = _tool_constraint_class()()
+    c.speed, c.acceleration = speed, acceleration
+    return c
+
+
+@functools.cache
+def _tool_constraint_class() -> type:
     from toppra.constraint import DiscretizationType, LinearConstraint
     from toppra.constraint.linear_constraint import canlinear_colloc_to_interpolate
 
     class ToolConstraint(LinearConstraint):
+        speed: Array
+        acceleration: Array
+
         def __init__(self) -> None:
             super().__init__()
             self.set_discretization_type(DiscretizationType.Interpolation)
@@ -263,6 +290,7 @@ def _tool_constraint(speed: Array, acceleration: Array) -> Any:
             d2 = path(grid, 2)[:, -1:]
             n = len(grid)
             F = np.repeat(np.array([[[1.0], [-1.0]]]), n, axis=0)
+            speed, acceleration = self.speed, self.acceleration
             g = np.stack([acceleration, acceleration], axis=1)
             xb = np.zeros((n, 2))
             with np.errstate(divide="ignore"):
@@ -272,7 +300,7 @@ def _tool_constraint(speed: Array, acceleration: Array) -> Any:
             )
             return a, b, c, F, g, None, xb  # (..., ubound, xbound)
 
-    return ToolConstraint()
+    return ToolConstraint
 
 
 class JointPath:
@@ -306,17 +334,17 @@ def joint_path(
 ) -> JointPath:
     """The :class:`JointPath` of ``path`` through IK samples Q (k, dof) at knots s (k,):
     q' and q'' from exact IK at s +- h (one-sided at the ends; m of path parameter)."""
-    k, n = Q.shape
+    k = len(Q)
     h = min(h, 0.25 * float(np.min(np.diff(s)))) if k > 1 else h
     lo = np.where(s - h < 0.0, 0, -1)  # offsets (in h) of the three stencil points
     lo = np.where(s + h > path.span, -2, lo)
     offs = lo[:, None] + np.arange(3)[None, :]  # (k, 3)
-    ss = s[:, None] + h * offs
+    R = np.repeat(Q[:, None, :], 3, axis=1)  # the knot itself is known: solve the others
+    other = offs != 0
+    ss = (s[:, None] + h * offs)[other]
     slope = np.gradient(Q, s, axis=0) if k > 2 else np.zeros_like(Q)
-    guess = (Q[:, None, :] + (h * offs)[:, :, None] * slope[:, None, :]).reshape(-1, n)
-    T = base_inv @ path.poses(ss.reshape(-1))
-    R, _ = refine_ik(robot, guess, T)
-    R = R.reshape(k, 3, n)
+    guess = (Q[:, None, :] + (h * offs)[:, :, None] * slope[:, None, :])[other]
+    R[other], _ = refine_ik(robot, guess, base_inv @ path.poses(ss))
     # derivatives at the stencil point with offset 0 (its index -lo in the stencil)
     c = -lo
     d1 = np.where(
@@ -352,7 +380,7 @@ def time_path(
     (None: only the joints). Returns None when no time law exists (a start speed that
     cannot be brought to rest)."""
     _toppra()
-    from toppra import algorithm, constraint
+    from toppra import algorithm
 
     spline = joint_path(robot, base_inv, path, Q, s_knots)
     vj = np.where(np.isfinite(limits.speed), limits.speed * JOINT_MARGIN, _UNLIMITED)
@@ -363,14 +391,7 @@ def time_path(
     tool_a = (
         np.full(len(grid), _UNLIMITED) if acceleration is None else np.interp(grid, *acceleration)
     )
-    cons = [
-        constraint.JointVelocityConstraint(np.stack([-v, v], axis=1)),
-        constraint.JointAccelerationConstraint(
-            np.stack([-a, a], axis=1),
-            discretization_scheme=constraint.DiscretizationType.Interpolation,
-        ),
-        _tool_constraint(tool_v, tool_a),
-    ]
+    cons = [*_joint_constraints(tuple(v), tuple(a)), _tool_constraint(tool_v, tool_a)]
     inst = algorithm.TOPPRA(cons, spline, gridpoints=grid, parametrizer="ParametrizeConstAccel")
     sd = inst.compute_parameterization(float(sd_start), 0.0)[1]
     if sd is None or np.isnan(sd).any():
