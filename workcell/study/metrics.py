@@ -30,7 +30,7 @@ axis) before the robot cannot reach it any more, with the same orientation and a
 configuration, outwards and inwards; the smallest over targets and both directions. Found
 by doubling steps from 5 mm, then bisection to 0.5 mm (a gap in the workspace narrower
 than the step can be stepped over); IK as ``move_end_effector`` solves it (closed form
-for the Puma family).
+for OPW and UR robots).
 
 **Joint-limit margin** (``joint_limit_margin_deg``): the smallest distance of a revolute
 joint from its nearest limit over every frame of the run, in degrees.
@@ -54,7 +54,7 @@ from numpy.typing import NDArray
 from workcell.cell.compile import CompiledCell
 from workcell.cell.workcell import RobotPlacement
 from workcell.errors import KinematicsError
-from workcell.robots.ik_closed import puma_config
+from workcell.robots.ik_closed import config_of
 from workcell.sim.cartesian import solve_pose
 from workcell.sim.contacts import ContactMonitor
 
@@ -285,10 +285,10 @@ def base_overlaps(sim: Simulator, tolerance: float) -> list[tuple[str, str, floa
 
 
 def target_config(placement: RobotPlacement, q: Array) -> str | None:
-    """The arm and elbow letters of a Puma-family robot at q (None for other robots)."""
-    if placement.robot.family != "puma":
+    """The arm and elbow letters of a closed-form (OPW or UR) robot at q (None for others)."""
+    if placement.robot.ik_family is None:
         return None
-    return puma_config(placement.robot, q)[:2]
+    return config_of(placement.robot, q)[:2]
 
 
 def _shoulder(sim: Simulator, robot: str) -> Array:
