@@ -39,13 +39,15 @@ def limited(speed=SPEED, acceleration=ACCELERATION, jerk=JERK):
 @functools.cache
 def _cell(key: str):
     cell = Workcell(f"motion_{key}")
-    robot = limited() if key == "limited" else puma260()
+    inf = np.full(6, np.inf)
+    robot = limited() if key == "limited" else limited(acceleration=inf, jerk=inf)
     cell.add_robot("puma", robot, base=BASE, q=HOME)
     return cell, compile_cell(cell)
 
 
 def make(key: str = "limited", **kw) -> Simulator:
-    """A simulator of one Puma 260 on a 0.4 m base, with ("limited") or without limits."""
+    """A simulator of one Puma 260 on a 0.4 m base with the limits above ("limited"), or
+    with speed limits only ("speeds")."""
     cell, cc = _cell(key)
     kw.setdefault("dt", 0.01)
     kw.setdefault("check_collisions", False)

@@ -252,3 +252,4 @@ def test_physics_mode_replays_jerk_limited_blended_programs():
     assert track["tool_max_m"] < 3e-3
     q_end = res.timeline.frame(-1)[2][sim._qadr["puma"]]
     assert np.abs(q_end - HOME).max() < 0.01
+    assert res.summary()["commands"] == sim.summary()["commands"]  # the plan's cycle

@@ -109,7 +109,7 @@ def test_a_bad_override_is_refused_and_changes_nothing(bad):
 
 
 def test_a_robot_without_limits_cannot_move_under_profile_jerk():
-    sim = make("plain", profile="jerk")  # the library Puma 260: no acceleration limits
+    sim = make("speeds", profile="jerk")  # speed limits only
     before = sim.frames, sim.sim_time
     with pytest.raises(ProgramError, match="joint 1 has no acceleration limit"):
         sim.move_joints_relative("puma", np.radians([10.0, 0, 0, 0, 0, 0]))

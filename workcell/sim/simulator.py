@@ -66,7 +66,10 @@ are merged, so the clock advances by the longest robot's time.
 Profiles (``profile``; :mod:`workcell.sim.profiles`): the thesis's constant speed
 ("linear"), or, beyond the thesis, "trapezoid" (``acceleration`` rad/s^2) or "quintic",
 for joint moves and ``move_end_effector``; the simulated clock then runs by the
-profile's duration.
+profile's duration. Like an industrial controller (:mod:`workcell.sim.motion`): profile
+"jerk" (each joint's own speed, acceleration and jerk limits), ``move_linear`` and
+``move_circular`` at a tool speed, zones that blend a move into the next, the speed
+override, and the cycle-time report (``summary()["commands"]``).
 
 Errors: every command validates first (unknown robot: ProgramError listing the robots;
 target outside the limits: JointLimitError naming the joint and its range; bad speed or
