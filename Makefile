@@ -25,6 +25,7 @@ bench: $(STAMP)
 	$(BIN)/python scripts/bench_sim.py
 	$(BIN)/python scripts/bench_record.py
 	$(BIN)/python scripts/bench_server.py
+	$(BIN)/python scripts/bench_study.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -26,8 +26,8 @@ from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = ROOT / "notebooks"
-NAMES = ("quickstart", "modeller", "kinematics", "thesis_examples")
-PICTURES = {"quickstart": 4, "modeller": 1, "kinematics": 1, "thesis_examples": 3}  # inline PNGs
+NAMES = ("quickstart", "modeller", "kinematics", "thesis_examples", "study")
+PICTURES = {"quickstart": 4, "modeller": 1, "kinematics": 2, "thesis_examples": 3, "study": 2}
 FLOAT = r"(-?\d+(?:\.\d*)?(?:e[-+]?\d+)?)"
 
 
@@ -142,6 +142,13 @@ def check_kinematics(out: str) -> None:
         assert ok == "True"
         assert float(err) < 1e-6
     assert "unreachable: success=False; reason: unreachable" in out
+    # the library: every robot has a closed-form family; a UR5e pose has 8 solutions
+    assert re.findall(r"^ur5e\s+6 axes, family ur", out, re.M)
+    assert re.findall(r"^kuka_kr6_r700\s+6 axes, family opw", out, re.M)
+    assert "UR5e: 8 solutions of the tool pose" in out
+    ur = re.findall(r"^ur5e ([lr][ud][nf])\s+True\s", out, re.M)
+    assert sorted(ur) == sorted(a + b + c for a in "lr" for b in "ud" for c in "nf")
+    assert _number(out, "largest |fk(q) - T| of the UR5e solutions:") < 1e-9
 
 
 def check_thesis_examples(out: str) -> None:
@@ -160,11 +167,32 @@ def check_thesis_examples(out: str) -> None:
     assert len(re.findall(r"^\d+ key frames -> ", out, re.M)) == 3
 
 
+def check_study(out: str) -> None:
+    """The placement study's numbers against independent runs of example 2: the thesis's
+    placement, and the best one on a cell moved by editing its saved form."""
+    from workcell.cell import Workcell
+    from workcell.examples import thesis_pick_place
+    from workcell.sim import Simulator
+
+    assert "8 of 9 candidates feasible" in out  # SMALL: 3 x 3, one placement out of reach
+    assert _number(out, "cycle time at the thesis's placement (0, 0):") == (
+        thesis_pick_place.run().sim_time
+    )
+    x, y = _number(out, "best placement: x ="), _number(out, "m, y =")
+    data = thesis_pick_place.build().to_dict()
+    data["robots"][0]["base"][0][3], data["robots"][0]["base"][1][3] = x, y
+    sim = Simulator(Workcell.from_dict(data))
+    thesis_pick_place.program(sim)
+    assert _number(out, "m, cycle time") == sim.sim_time
+    assert "second run: 0 evaluated, 9 already done" in out
+
+
 CHECKS = {
     "quickstart": check_quickstart,
     "modeller": check_modeller,
     "kinematics": check_kinematics,
     "thesis_examples": check_thesis_examples,
+    "study": check_study,
 }
 
 

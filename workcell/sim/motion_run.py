@@ -241,9 +241,11 @@ class MotionRunner:
             )
 
     def _budget(self: Simulator, name: str, command: str, frames: int, end: float) -> None:
-        """LimitError when a command's frames or its end time (s) are over the budget."""
+        """LimitError when a command's frames, the simulation's or its end time (s) are
+        over the work budget (before any work)."""
         work_limits.check("max_frames_per_command", frames, f"{command} '{name}'")
         work_limits.check("max_sim_time", end, f"{command} '{name}': the clock")
+        self.timeline.reserve(frames, f"{command} '{name}'")
 
     def _emit_rows(
         self: Simulator, name: str, times: Array, rows: Any, carried: list, command: str

@@ -66,9 +66,9 @@ class Motion:
 
 def frames_of(duration: float, dt: float, what: str) -> Array:
     """The sample times of a motion of ``duration`` (s) every ``dt`` (s), after checking
-    the work budget (``max_frames_per_command``) before they are made."""
+    the work budget (``max_frames_per_command``, naming ``what``) before they are made."""
     work_limits.check("max_frames_per_command", math.ceil(duration / dt), what)
-    return step_times(duration, dt)
+    return step_times(duration, dt)  # (which checks again, without the command's name)
 
 
 def _sampled(law: Any, t: Array, target: Array) -> Rows:

@@ -88,6 +88,7 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell import limits
 from workcell.cell.compile import CompiledCell, compile_cell
 from workcell.cell.workcell import Workcell
 from workcell.checks import is_finite_number
@@ -349,6 +350,7 @@ class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCo
             raise ProgramError(f"wait: seconds must be a finite number >= 0, got {seconds!r}")
         self._not_in_block("wait")
         s = float(seconds)
+        limits.check("max_sim_time", self.sim_time + s, f"wait {s:.6g} s: the clock")
         with self._transaction():
             if s > 0:
                 c0 = time.perf_counter()

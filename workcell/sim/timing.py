@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell import limits as work_limits
 from workcell.errors import UnreachableError
 from workcell.robots.robot import Robot
 from workcell.sim.jerk import Limits
@@ -53,6 +54,11 @@ def sample_params(path: CartesianPath, step: float) -> Array:
     """Path parameters of the IK samples: each piece cut into equal parts at most
     ``step`` (m; a curved piece's own ``max_step`` if shorter) and 2 deg of turn long
     (the start included), and at least 24 of them in all (toppra's grid)."""
+    work_limits.check(
+        "max_frames_per_command",
+        path.span / step,
+        f"a {path.span:.4g} m path sampled every {step:g} m",
+    )
     out = [np.zeros(1)]
     step = min(step, path.span / (_MIN_GRID - 1)) if path.span > 0 else step
     for k, p in enumerate(path.pieces):

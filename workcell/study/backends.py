@@ -20,8 +20,10 @@ rows are the same whatever the backend (see :mod:`workcell.study.evaluation`).
 from __future__ import annotations
 
 import abc
+import contextlib
 import os
 import pickle
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -49,12 +51,14 @@ def _batch_size(n: int, workers: int, most: int) -> int:
 
 
 class Backend(abc.ABC):
-    """Runs candidates; ``memory_mb`` maps worker process ids to their peak memory (MB)."""
+    """Runs candidates; ``memory_mb`` maps worker process ids to their peak memory (MB),
+    ``cpu_s`` to the CPU time they spent on candidates (s)."""
 
     name = ""
 
     def __init__(self) -> None:
         self.memory_mb: dict[int, float] = {}
+        self.cpu_s: dict[int, float] = {}
         self.workers = 1
 
     @abc.abstractmethod
@@ -68,8 +72,14 @@ class SerialBackend(Backend):
     name = "serial"
 
     def run(self, setup: Setup, todo: list[Candidate]) -> Iterator[dict[str, Any]]:
-        yield from evaluate_batch(setup, todo)
+        cpu = 0.0
+        for c in todo:  # CPU time of the evaluations only, not of the caller's work
+            t0 = time.process_time()
+            row = next(evaluate_batch(setup, [c]))
+            cpu += time.process_time() - t0
+            yield row
         self.memory_mb[os.getpid()] = peak_rss_mb()
+        self.cpu_s[os.getpid()] = cpu
 
 
 class ProcessBackend(Backend):
@@ -104,13 +114,18 @@ class ProcessBackend(Backend):
             yield from pool.run(todo)
         finally:
             self.memory_mb.update(pool.memory_mb)
+            self.cpu_s.update(pool.cpu_s)
             self.crashes = pool.crashes
 
 
-def _ray_batch(setup: Setup, batch: list[Candidate]) -> tuple[list[dict[str, Any]], int, float]:
-    """A Ray task: the rows of ``batch``, this worker's pid and peak memory (MB)."""
+def _ray_batch(
+    setup: Setup, batch: list[Candidate]
+) -> tuple[list[dict[str, Any]], int, float, float]:
+    """A Ray task: the rows of ``batch``, this worker's pid, peak memory (MB) and the CPU
+    time (s) the batch took."""
+    t0 = time.process_time()
     rows = list(evaluate_batch(setup, batch))
-    return rows, os.getpid(), peak_rss_mb()
+    return rows, os.getpid(), peak_rss_mb(), time.process_time() - t0
 
 
 def import_ray() -> Any:
@@ -163,13 +178,13 @@ class RayBackend(Backend):
     def run(self, setup: Setup, todo: list[Candidate]) -> Iterator[dict[str, Any]]:
         ray = import_ray()
         started = self._init(ray)
+        pending: dict[Any, list[Candidate]] = {}
         try:
             cpus = int(ray.cluster_resources().get("CPU", self.workers))
             self.workers = cpus
             size = self.batch_size or _batch_size(len(todo), cpus, 32)
             task = ray.remote(num_cpus=1, max_retries=self.retries)(_ray_batch)
             ref = ray.put(setup)
-            pending = {}
             for i in range(0, len(todo), size):
                 batch = todo[i : i + size]
                 pending[task.remote(ref, batch)] = batch
@@ -178,7 +193,7 @@ class RayBackend(Backend):
                 for r in done:
                     batch = pending.pop(r)
                     try:
-                        rows, pid, mb = ray.get(r)
+                        rows, pid, mb, cpu = ray.get(r)
                     except ray.exceptions.RayError:
                         if len(batch) > 1:  # find the candidate that kills its worker
                             for c in batch:
@@ -189,8 +204,12 @@ class RayBackend(Backend):
                             )
                         continue
                     self.memory_mb[pid] = max(mb, self.memory_mb.get(pid, 0.0))
+                    self.cpu_s[pid] = self.cpu_s.get(pid, 0.0) + cpu
                     yield from rows
         finally:
+            for r in list(pending):
+                with contextlib.suppress(Exception):
+                    ray.cancel(r)  # interrupted: drop what has not run
             if started:
                 ray.shutdown()
 

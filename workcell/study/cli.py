@@ -6,6 +6,7 @@ Top-level imports stay light: ``workcell --help`` imports this module.
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from workcell.examples import CELLS
@@ -49,17 +50,25 @@ def _study(args: argparse.Namespace) -> int:
         mode=args.mode,
         dt=args.dt,
     )
-    outcome = execute(
-        study,
-        args.out,
-        backend_name=args.backend,
-        workers=args.workers,
-        address=args.address,
-        batch_size=args.batch_size,
-        retries=args.retries,
-        plots=not args.no_plots,
-        record=args.record_best,
-    )
+    try:
+        outcome = execute(
+            study,
+            args.out,
+            backend_name=args.backend,
+            workers=args.workers,
+            address=args.address,
+            batch_size=args.batch_size,
+            retries=args.retries,
+            plots=not args.no_plots,
+            record=args.record_best,
+        )
+    except KeyboardInterrupt:
+        print(
+            f"\ninterrupted: the rows done are in {args.out}/results.parquet; the same "
+            "command again does the rest",
+            file=sys.stderr,
+        )
+        return 130
     b = outcome.backend
     done = f"{outcome.evaluated} candidate(s) evaluated"
     if outcome.resumed:

@@ -25,6 +25,7 @@ import multiprocessing as mp
 import os
 import pickle
 import signal
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection, wait
@@ -54,11 +55,18 @@ def _worker(conn: Connection, setup_bytes: bytes, environ: dict[str, str]) -> No
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     os.environ.clear()
     os.environ.update(environ)
+    import threading
+
+    from tqdm import tqdm
+
+    # workers draw no progress bars: a thread lock for tqdm, not its default
+    # multiprocessing one (a semaphore a stopped worker would leave behind)
+    tqdm.set_lock(threading.RLock())
     from workcell.study.evaluation import evaluator
 
     ev = evaluator(pickle.loads(setup_bytes))
     ev.template({})  # compile the cell before the first batch
-    conn.send(("ready", os.getpid(), peak_rss_mb()))
+    conn.send(("ready", os.getpid(), peak_rss_mb(), time.process_time()))
     while True:
         try:
             batch = conn.recv()
@@ -68,7 +76,7 @@ def _worker(conn: Connection, setup_bytes: bytes, environ: dict[str, str]) -> No
             return
         for candidate in batch:
             conn.send(("row", ev.evaluate(candidate)))
-        conn.send(("idle", os.getpid(), peak_rss_mb()))
+        conn.send(("idle", os.getpid(), peak_rss_mb(), time.process_time()))
 
 
 @contextlib.contextmanager
@@ -127,6 +135,8 @@ class ProcessPool:
         self.batch_size = batch_size
         self.retries = retries
         self.memory_mb: dict[int, float] = {}  # worker pid -> peak resident memory
+        self.cpu_s: dict[int, float] = {}  # worker pid -> CPU time on candidates (s)
+        self._cpu0: dict[int, float] = {}
         self.crashes = 0
         self._ctx = _context()
 
@@ -141,70 +151,101 @@ class ProcessPool:
 
     def run(self, todo: list[Any]) -> Iterator[dict[str, Any]]:
         """A row per candidate of ``todo``, as they finish (any order)."""
-        from workcell.study.evaluation import error_row
-
-        queue = collections.deque(todo)
-        attempts: collections.Counter[int] = collections.Counter()
-        start_failures = 0
-        pool = [self._start() for _ in range(min(self.workers, len(queue)))]
+        self._queue = collections.deque(todo)
+        self._attempts: collections.Counter[int] = collections.Counter()
+        self._start_failures = 0
+        pool: list[_Worker] = []
+        finished = False
         try:
-            while queue or any(w.inflight for w in pool):
-                for w in pool:
-                    if w.ready and not w.inflight and queue:
-                        batch = [queue.popleft() for _ in range(min(self.batch_size, len(queue)))]
-                        w.inflight.extend(batch)
-                        w.conn.send(batch)
-                by_conn = {w.conn: w for w in pool}
-                by_sentinel = {w.process.sentinel: w for w in pool}
-                dead: list[_Worker] = []
-                for obj in wait([*by_conn, *by_sentinel]):
-                    w = by_conn.get(obj) or by_sentinel[obj]
-                    if w in dead:
-                        continue
-                    try:
-                        while w.conn.poll():
-                            kind, *rest = w.conn.recv()
-                            if kind == "row":
-                                w.inflight.popleft()
-                                yield rest[0]
-                            else:  # "ready" or "idle"
-                                w.ready = True
-                                self.memory_mb[rest[0]] = rest[1]
-                    except (EOFError, OSError):
-                        dead.append(w)
-                        continue
-                    if obj is w.process.sentinel:
-                        dead.append(w)
-                for w in dead:
-                    pool.remove(w)
-                    w.process.join()
-                    w.conn.close()
-                    if not w.ready:
-                        start_failures += 1
-                        if start_failures > _MAX_START_FAILURES:
-                            raise StudyError(
-                                f"worker processes die before they start (exit code "
-                                f"{w.process.exitcode}); run with backend 'serial' to see why"
-                            )
-                    if w.inflight:
-                        self.crashes += 1
-                        suspect = w.inflight.popleft()
-                        queue.extendleft(reversed(w.inflight))
-                        attempts[suspect.id] += 1
-                        if attempts[suspect.id] > self.retries:
-                            msg = CRASH_MESSAGE.format(self.retries)
-                            yield error_row(self.setup, suspect, "WorkerCrashed", msg)
-                        else:
-                            queue.appendleft(suspect)
-                    if queue and len(pool) < self.workers:
-                        pool.append(self._start())
-        finally:
-            for w in pool:
-                with contextlib.suppress(OSError, BrokenPipeError):
+            try:
+                for _ in range(min(self.workers, len(todo))):
+                    pool.append(self._start())
+            except (BrokenPipeError, EOFError, RuntimeError) as exc:
+                raise StudyError(
+                    f"worker processes could not start ({type(exc).__name__}); a script that "
+                    'runs a study with worker processes must do so under "if __name__ == '
+                    "'__main__':\" (Python starts each worker by importing the main script), "
+                    "or use backend 'serial'"
+                ) from exc
+            while self._queue or any(w.inflight for w in pool):
+                self._dispatch(pool)
+                yield from self._receive(pool, None)
+                if self._queue and len(pool) < self.workers:
+                    pool.append(self._start())  # in place of a dead one
+            for w in pool:  # done: let the workers end themselves
+                with contextlib.suppress(OSError):
                     w.conn.send(None)
+            finished = True
+        finally:  # interrupted (or a worker that will not end): stopped
             for w in pool:
-                w.process.join(timeout=5)
+                w.process.join(timeout=5 if finished else 0)
                 if w.process.is_alive():
                     w.process.terminate()
                     w.process.join()
                 w.conn.close()
+
+    def _dispatch(self, pool: list[_Worker]) -> None:
+        """Give a batch to every ready, idle worker."""
+        q = self._queue
+        for w in pool:
+            if w.ready and not w.inflight and q:
+                batch = [q.popleft() for _ in range(min(self.batch_size, len(q)))]
+                w.inflight.extend(batch)
+                w.conn.send(batch)
+
+    def _receive(self, pool: list[_Worker], timeout: float | None) -> Iterator[dict[str, Any]]:
+        """Rows and messages from the workers (waiting up to ``timeout`` s, None: until
+        something happens); dead workers are buried."""
+        by_conn = {w.conn: w for w in pool}
+        by_sentinel = {w.process.sentinel: w for w in pool}
+        dead: list[_Worker] = []
+        for obj in wait([*by_conn, *by_sentinel], timeout):
+            w = by_conn.get(obj) or by_sentinel[obj]
+            if w in dead:
+                continue
+            try:
+                while w.conn.poll():
+                    kind, *rest = w.conn.recv()
+                    if kind == "row":
+                        w.inflight.popleft()
+                        yield rest[0]
+                    else:  # "ready" or "idle": pid, memory (MB), CPU time (s)
+                        w.ready = True
+                        pid, mb, cpu = rest
+                        self.memory_mb[pid] = mb
+                        self.cpu_s[pid] = cpu - self._cpu0.setdefault(pid, cpu)
+            except (EOFError, OSError):
+                dead.append(w)
+                continue
+            if obj is w.process.sentinel:
+                dead.append(w)
+        for w in dead:
+            pool.remove(w)
+            yield from self._bury(w)
+
+    def _bury(self, w: _Worker) -> Iterator[dict[str, Any]]:
+        """A dead worker: its candidate is retried or gets its error row; the rest of its
+        batch goes back to the queue."""
+        from workcell.study.evaluation import error_row
+
+        w.process.join()
+        w.conn.close()
+        if not w.ready:
+            self._start_failures += 1
+            if self._start_failures > _MAX_START_FAILURES:
+                raise StudyError(
+                    f"worker processes die before they start (exit code "
+                    f"{w.process.exitcode}); run with backend 'serial' to see why"
+                )
+        if not w.inflight:
+            return
+        self.crashes += 1
+        suspect = w.inflight.popleft()
+        self._queue.extendleft(reversed(w.inflight))
+        self._attempts[suspect.id] += 1
+        if self._attempts[suspect.id] > self.retries:
+            yield error_row(
+                self.setup, suspect, "WorkerCrashed", CRASH_MESSAGE.format(self.retries)
+            )
+        else:
+            self._queue.appendleft(suspect)

@@ -63,8 +63,9 @@ MAX_GRID = 1_000_000  # candidates in a full grid; past that, sample
 
 
 def _nice(v: float) -> float:
-    """``v`` rounded to 12 significant digits (0.30000000000000004 -> 0.3)."""
-    return float(f"{v:.12g}")
+    """``v`` to 12 decimals and 12 significant digits (0.30000000000000004 -> 0.3,
+    -0.18 + 6 * 0.03 -> 0.0, never -0.0)."""
+    return float(f"{round(v, 12):.12g}") + 0.0
 
 
 @dataclass(frozen=True)

@@ -4,6 +4,8 @@ that kills its worker is retried, then becomes an error row; the others carry on
 from __future__ import annotations
 
 import shutil
+import subprocess
+import sys
 import tempfile
 
 import numpy as np
@@ -147,3 +149,18 @@ def test_ray_retries_a_killed_worker_then_writes_an_error_row(local_ray):
         assert rows[2]["error"] == "WorkerCrashed: " + CRASH_MESSAGE.format(retries)
     # 2 attempts, then 1 for the whole batch and 1 for the candidate alone
     assert len((local_ray / "attempt-0.300").read_text().split()) == 4
+
+
+@pytest.mark.slow
+def test_a_script_without_a_main_guard_is_told_what_to_do(tmp_path):
+    script = tmp_path / "study_script.py"
+    script.write_text(
+        "from workcell.study import Study, run\n"
+        "run(Study(cell='joints', vary={'puma.base.x': '0,0.1'}), backend='process', workers=1)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path
+    )
+    assert done.returncode != 0
+    assert "if __name__ == '__main__':" in done.stderr
+    assert "StudyError" in done.stderr
