@@ -39,7 +39,17 @@ from workcell.robots.robot import Robot
 from workcell.sim.jerk import Limits
 from workcell.sim.paths import CartesianPath
 
-__all__ = ["JOINT_MARGIN", "PathMotion", "PathProfile", "refine_ik", "sample_params", "time_path"]
+__all__ = [
+    "JOINT_MARGIN",
+    "JointPath",
+    "PathMotion",
+    "PathProfile",
+    "jacobians",
+    "joint_path",
+    "refine_ik",
+    "sample_params",
+    "time_path",
+]
 
 Array = NDArray[np.float64]
 JOINT_MARGIN = 0.99  # toppra gets the joint limits times this
@@ -198,18 +208,34 @@ class PathMotion:
         return out
 
 
-def refine_ik(robot: Robot, Q: Array, T: Array, iterations: int = 4) -> tuple[Array, Array]:
+def jacobians(robot: Robot, Q: Array, F: Array | None = None) -> Array:
+    """Jacobians (k, 6, n) of the tool pose at joint rows Q (k, n) (base frame: linear then
+    angular velocity per unit joint speed): forward differences of ``fk_batch`` (``F``:
+    the poses at Q, when known), vectorised over the rows."""
+    k, n = Q.shape
+    h = 1e-7
+    F = robot.fk_batch(Q) if F is None else F
+    Fp = robot.fk_batch((Q[:, None, :] + np.eye(n) * h).reshape(-1, n)).reshape(k, n, 4, 4)
+    J = np.empty((k, 6, n))
+    J[:, :3] = np.transpose(Fp[:, :, :3, 3] - F[:, None, :3, 3], (0, 2, 1)) / h
+    Rrel = Fp[:, :, :3, :3] @ np.transpose(F[:, None, :3, :3], (0, 1, 3, 2))
+    J[:, 3:] = np.transpose(_vee(Rrel), (0, 2, 1)) / h
+    return J
+
+
+def refine_ik(
+    robot: Robot, Q: Array, T: Array, iterations: int = 4, J: Array | None = None
+) -> tuple[Array, Array]:
     """Gauss-Newton from joint rows Q (k, n) to tool poses T (k, 4, 4, base frame).
 
     Returns the rows and each one's error (max of position m and orientation rad). The
-    Jacobian is a forward difference of ``fk_batch``, vectorised over the rows."""
+    Jacobians are :func:`jacobians` at each iterate, or the given ``J`` (k, 6, n) kept
+    throughout (rows that start very near their solution converge as well)."""
     Q = np.array(Q, dtype=np.float64)
     k, n = Q.shape
     err = np.zeros(k)
     if k == 0:
         return Q, err
-    h = 1e-7
-    eye = np.eye(n) * h
     for it in range(iterations + 1):
         F = robot.fk_batch(Q)
         e = _pose_residual(F, T)
@@ -217,16 +243,10 @@ def refine_ik(robot: Robot, Q: Array, T: Array, iterations: int = 4) -> tuple[Ar
         bad = err > 1e-13
         if it == iterations or not bad.any():
             break
-        Qb, Fb, eb = Q[bad], F[bad], e[bad]
-        m = len(Qb)
-        Fp = robot.fk_batch((Qb[:, None, :] + eye).reshape(-1, n)).reshape(m, n, 4, 4)
-        J = np.empty((m, 6, n))
-        J[:, :3] = np.transpose(Fp[:, :, :3, 3] - Fb[:, None, :3, 3], (0, 2, 1)) / h
-        Rrel = Fp[:, :, :3, :3] @ np.transpose(Fb[:, None, :3, :3], (0, 1, 3, 2))
-        J[:, 3:] = np.transpose(_vee(Rrel), (0, 2, 1)) / h
-        Jt = np.transpose(J, (0, 2, 1))
-        A = Jt @ J + 1e-12 * np.eye(n)
-        Q[bad] += np.linalg.solve(A, (Jt @ eb[:, :, None]))[:, :, 0]
+        Jb = jacobians(robot, Q[bad], F[bad]) if J is None else J[bad]
+        Jt = np.transpose(Jb, (0, 2, 1))
+        A = Jt @ Jb + 1e-12 * np.eye(n)
+        Q[bad] += np.linalg.solve(A, (Jt @ e[bad][:, :, None]))[:, :, 0]
     return Q, err
 
 
@@ -350,7 +370,8 @@ def joint_path(
     ss = (s[:, None] + h * offs)[other]
     slope = np.gradient(Q, s, axis=0) if k > 2 else np.zeros_like(Q)
     guess = (Q[:, None, :] + (h * offs)[:, :, None] * slope[:, None, :])[other]
-    R[other], _ = refine_ik(robot, guess, base_inv @ path.poses(ss))
+    J = np.repeat(jacobians(robot, Q)[:, None], 3, axis=1)[other]  # the knot's, for all three
+    R[other], _ = refine_ik(robot, guess, base_inv @ path.poses(ss), J=J)
     # derivatives at the stencil point with offset 0 (its index -lo in the stencil)
     c = -lo
     d1 = np.where(
