@@ -253,3 +253,26 @@ def test_physics_mode_replays_jerk_limited_blended_programs():
     q_end = res.timeline.frame(-1)[2][sim._qadr["puma"]]
     assert np.abs(q_end - HOME).max() < 0.01
     assert res.summary()["commands"] == sim.summary()["commands"]  # the plan's cycle
+
+
+def test_linear_moves_blend_inside_a_concurrent_block():
+    cell, cc = _two()
+    times = []
+    for z in (0.0, 0.02):
+        sim = Simulator(cell, compiled=cc, profile="jerk", check_collisions=False)
+        for r, dx in (("a", 0.0), ("b", 1.2)):
+            sim.move_end_effector(r, pose((dx, 0.0, 0.0)), config="ru")
+        t0, first = sim.sim_time, sim.frames
+        with sim.concurrently():
+            for r, dx in (("a", 0.0), ("b", 1.2)):
+                sim.move_linear(r, pose((dx, 0.1, 0.0)), speed=V, zone=z)
+                sim.move_linear(r, pose((dx - 0.06, 0.1, 0.0)), speed=V)
+        times.append(sim.sim_time - t0)
+        P = tool_points(sim, "a")[first - 1 :]
+        corner = pose((0.0, 0.1, 0.0))[:3, 3]
+        off = (seg_distance(P, pose()[:3, 3], corner) > 1e-6) & (
+            seg_distance(P, corner, pose((-0.06, 0.1, 0.0))[:3, 3]) > 1e-6
+        )
+        assert np.linalg.norm(P[off] - corner, axis=1).max(initial=0.0) <= z + 1e-9
+        assert bool(off.any()) == (z > 0)
+    assert times[1] < times[0] - 0.05

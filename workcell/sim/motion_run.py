@@ -24,7 +24,7 @@ from workcell.sim.cartesian import path_joints
 from workcell.sim.cycle import command_record
 from workcell.sim.jerk import Limits, joint_limits, require_finite
 from workcell.sim.paths import CartesianPath
-from workcell.sim.planning import Motion, Rows, frames_of, plan_move
+from workcell.sim.planning import Motion, Rows, frames_of, law_rows, plan_move
 from workcell.sim.timeline import TimelineMark
 from workcell.sim.timing import PathMotion, sample_params, time_path
 from workcell.spatial import invert
@@ -143,7 +143,7 @@ class MotionRunner:
             if law is None:  # from rest to rest a time law always exists
                 raise UnreachableError("no time law along the path")
             t = frames_of(law.duration, self.dt, f"{command} '{name}'")
-            motion = Motion(t, _law_rows(law, t, Q[-1]), law.activity(), law)
+            motion = Motion(t, law_rows(law, t, Q[-1]), law.activity(), law)
             blend = None
             if pend is not None:
                 blend = joint_blend(pend, motion, path.length, placement, limits, self.dt)
@@ -361,15 +361,3 @@ def _restore(tl: Any, cut: int, saved: tuple[Array, Array, Array, tuple]) -> Non
         tl.add_event(e.t, e.robot, e.kind, e.detail, frame=e.frame, data=e.data)
     if at - cut < len(times):
         tl.extend(times[at - cut :], walls[at - cut :], Q[at - cut :])
-
-
-def _law_rows(law: PathMotion, t: Array, target: Array) -> Rows:
-    last = len(t) - 1
-
-    def rows(lo: int, hi: int) -> Array:
-        Q = law.positions(t[lo:hi])
-        if hi > last:
-            Q[last - lo] = target
-        return Q
-
-    return rows

@@ -35,7 +35,7 @@ from workcell.sim import profiles
 from workcell.sim.jerk import Limits, plan_jerk
 from workcell.sim.profiles import step_times
 
-__all__ = ["Motion", "Rows", "frames_of", "plan_move", "plan_waypoints"]
+__all__ = ["Motion", "Rows", "frames_of", "law_rows", "plan_move", "plan_waypoints"]
 
 Array = NDArray[np.float64]
 Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, hi)
@@ -71,8 +71,9 @@ def frames_of(duration: float, dt: float, what: str) -> Array:
     return step_times(duration, dt)  # (which checks again, without the command's name)
 
 
-def _sampled(law: Any, t: Array, target: Array) -> Rows:
-    """Rows of a law at times t, built on demand, the last one exactly ``target``."""
+def law_rows(law: Any, t: Array, target: Array) -> Rows:
+    """Rows of a law (anything with ``positions(t)``) at times t, built on demand (rows(lo,
+    hi): a long motion is never held at once), the last one exactly ``target``."""
     last = len(t) - 1
 
     def rows(lo: int, hi: int) -> Array:
@@ -110,7 +111,7 @@ def plan_move(
         if jerk:
             law = plan_jerk(q0, target, limits)  # type: ignore[arg-type]
             t = frames_of(law.duration, dt, what)
-            return Motion(t, _sampled(law, t, target), law.activity(), law)
+            return Motion(t, law_rows(law, t, target), law.activity(), law)
         T = profiles.duration(profile, big, speed, acceleration)
         t = frames_of(T, dt, what)
         s = profiles.progress(profile, t, T, big, speed, acceleration)
