@@ -125,3 +125,23 @@ def test_run_prints_the_cycle_time_table(tmp_path, capsys):
     assert "limited by" in out
     assert "move_circular" in out
     assert "total " in out
+
+
+def test_demo_json_carries_the_cycle_time_records(capsys):
+    import json
+
+    from workcell.cli import main
+
+    assert main(["demo", "joints", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    recs = out["commands"]
+    assert [r["command"] for r in recs] == [
+        "move_joints_relative",
+        "move_joints_absolute",
+        "move_joints_absolute",
+    ]
+    # eq. 4.27 per command: the largest joint motion (70, 40, 60 deg) over 0.3 rad/s
+    expected = [math.radians(d) / 0.3 for d in (70, 40, 60)]
+    assert [r["duration_s"] for r in recs] == pytest.approx(expected, rel=1e-12)
+    assert {r["limited_by"] for r in recs} == {"robot speed"}
+    assert sum(r["duration_s"] for r in recs) == pytest.approx(out["sim_time_s"], rel=1e-12)
