@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import functools
+import itertools
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from motion_helpers import (
     ACCELERATION,
     BASE,
+    CENTRE,
     HOME,
     JERK,
     SPEED,
@@ -19,7 +23,7 @@ from motion_helpers import (
     tool_points,
 )
 
-from workcell import UnreachableError, Workcell, compile_cell
+from workcell import UnreachableError, Workcell, WorkcellError, compile_cell
 from workcell.sim import Simulator
 from workcell.spatial import translation
 
@@ -276,3 +280,40 @@ def test_linear_moves_blend_inside_a_concurrent_block():
         assert np.linalg.norm(P[off] - corner, axis=1).max(initial=0.0) <= z + 1e-9
         assert bool(off.any()) == (z > 0)
     assert times[1] < times[0] - 0.05
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    moves=st.lists(
+        st.tuples(
+            st.sampled_from(["joints", "linear", "circular"]),
+            st.sampled_from([0.0, 0.01, 0.03, 0.2]),  # zones, 0.2 m is clipped
+            st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6),
+            st.floats(0.05, 0.4),  # m/s
+        ),
+        min_size=2,
+        max_size=4,
+    )
+)
+def test_random_programs_keep_every_limit_and_account_for_their_time(moves):
+    sim = make(profile="jerk", dt=0.004)
+    sim.move_end_effector("puma", pose(), config="ru")
+    first = sim.frames
+    for kind, zone, u, speed in moves:
+        off = np.array([0.07, 0.12, 0.08]) * np.array(u[:3])
+        try:
+            if kind == "joints":
+                sim.move_joints_relative("puma", np.radians(20.0) * np.array(u), zone=zone)
+            elif kind == "linear":
+                sim.move_linear("puma", pose(off), speed=speed, zone=zone)
+            else:
+                via = CENTRE + 0.5 * off + 0.03 * np.array(u[3:])
+                sim.move_circular("puma", via, pose(off), speed=speed, zone=zone)
+        except WorkcellError:  # out of reach, collinear: refused, nothing changed
+            pass
+    if sim.frames > first + 3:
+        within_limits(sim, first, tol=1e-6)
+    recs = sim.cycle_time()["commands"]
+    assert sum(r["duration_s"] for r in recs) == pytest.approx(sim.sim_time, abs=1e-9)
+    for a, b in itertools.pairwise(recs):
+        assert a["t_start"] + a["duration_s"] == pytest.approx(b["t_start"], abs=1e-9)

@@ -41,16 +41,16 @@ from workcell.errors import ProgramError
 from workcell.sim.cartesian import path_joints
 from workcell.sim.jerk import Limits, plan_jerk
 from workcell.sim.paths import CartesianPath, blend_paths
-from workcell.sim.planning import Motion, frames_of
+from workcell.sim.planning import Motion
 from workcell.sim.profiles import step_times
 from workcell.sim.timeline import TimelineMark
-from workcell.sim.timing import PathMotion, sample_params, time_path
+from workcell.sim.timing import PathMotion, sample_params, timed_frames
 from workcell.spatial import invert
 
 __all__ = ["Blend", "Pending", "clip_zone", "joint_blend", "path_blend", "tool_lengths"]
 
 Array = NDArray[np.float64]
-_FLOOR = 1e-9  # m: a zone this small is no zone
+_FLOOR = 1e-4  # m: a zone (after clipping) below 0.1 mm is a stop (no corner to round)
 
 
 @dataclass
@@ -241,7 +241,10 @@ def path_blend(
     if z < _FLOOR:
         return None
     q_anchor = _frame_q(law, t_anchor - p.t0)
-    path, s_in, s_out = blend_paths(a_path, path_b, z)
+    blended = blend_paths(a_path, path_b, z)
+    if blended is None:  # the path turns back: the robot stops there
+        return None
+    path, s_in, s_out = blended
     s_k = sample_params(path, step)
     poses = path.poses(s_k[1:])
     Q = np.vstack(
@@ -259,24 +262,19 @@ def path_blend(
         (big if acceleration is None else acceleration),
     )
     knots = np.array([0.0, s_in, s_out, path.span])
-    new = time_path(
-        placement.robot,
-        invert(placement.base),
-        path,
-        Q,
-        s_k,
-        limits=limits,
+    timed = timed_frames(
+        placement.robot, invert(placement.base), path, Q, s_k, dt, command, limits=limits,
         speed=None if p.speed is None and speed is None else (knots, np.array([va, va, vb, vb])),
         acceleration=None
         if p.acceleration is None and acceleration is None
         else (knots, np.array([aa, aa, ab, ab])),
         sd_start=sd_a,
-    )
-    if new is None:
+    )  # fmt: skip
+    if timed is None:
         return None
-    t = frames_of(new.duration, dt, command)
-    rows = new.positions(t) if len(t) else np.empty((0, len(q_anchor)))
-    if len(t):
+    new, t, rows = timed
+    if rows is None:  # a very long corner: its frames made here, not checked
+        rows = new.positions(t)
         rows[-1] = Q[-1]
     t_in = new.profile.time_at(s_in)
     n_a = int(np.searchsorted(t, t_in, side="right"))

@@ -24,9 +24,9 @@ from workcell.sim.cartesian import path_joints
 from workcell.sim.cycle import command_record
 from workcell.sim.jerk import Limits, joint_limits, require_finite
 from workcell.sim.paths import CartesianPath
-from workcell.sim.planning import Motion, Rows, frames_of, law_rows, plan_move
+from workcell.sim.planning import Motion, Rows, law_rows, plan_move
 from workcell.sim.timeline import TimelineMark
-from workcell.sim.timing import PathMotion, sample_params, time_path
+from workcell.sim.timing import PathMotion, sample_params, timed_frames
 from workcell.spatial import invert
 
 if TYPE_CHECKING:
@@ -135,17 +135,21 @@ class MotionRunner:
                 placement, q0, path.poses(s[1:]), s[1:] / path.span, max_jump=max_jump, what=command
             )
             Q = np.vstack([q0, Q])
-            law = time_path(
-                placement.robot, invert(placement.base), path, Q, s, limits=limits,
-                speed=None if v is None else (np.array([0.0, path.span]), np.array([v, v])),
-                acceleration=None if a is None else (np.array([0.0, path.span]), np.array([a, a])),
+            ends = np.array([0.0, path.span])
+            timed = timed_frames(
+                placement.robot, invert(placement.base), path, Q, s, self.dt,
+                f"{command} '{name}'", limits=limits,
+                speed=None if v is None else (ends, np.array([v, v])),
+                acceleration=None if a is None else (ends, np.array([a, a])), q_before=q0,
             )  # fmt: skip
-            if law is None:  # from rest to rest a time law always exists
+            if timed is None:  # from rest to rest a time law always exists
                 raise UnreachableError("no time law along the path")
-            t = frames_of(law.duration, self.dt, f"{command} '{name}'")
-            motion = Motion(t, law_rows(law, t, Q[-1]), law.activity(), law)
+            law, t, rows = timed
+            motion = Motion(
+                t, law_rows(law, t, Q[-1]) if rows is None else rows, law.activity(), law
+            )
             blend = None
-            if pend is not None:
+            if pend is not None and not isinstance(pend.law, PathMotion):  # a joint move
                 blend = joint_blend(pend, motion, path.length, placement, limits, self.dt)
         except UnreachableError as exc:
             raise UnreachableError(f"{command} '{name}': {exc}") from exc

@@ -13,11 +13,13 @@ a line whose tool point does not move (the tool only turns) has ``length`` 0 and
   the point ``zone`` before the corner on the first path (arc length) to the point
   ``zone`` after it on the second, with control points E, E + a t_a, E + b t_a,
   X - b t_b, X - a t_b, X (E, X the entry and exit points, t_a, t_b the paths' tangents
-  there; a < b <= 0.75 zone chosen by the angle of the turn for the smallest peak
-  curvature). It is tangent to both paths; against a line it is also
-  curvature-continuous (its second derivative vanishes at the ends) and, between two
-  lines, it lies inside the sphere of radius ``zone`` about the corner (the convex hull
-  of its control points does: they lie on the two segments from the corner). Its
+  there; a = b / 2, b <= 0.75 zone chosen by the angle of the turn for a small peak
+  curvature reached gently; next to an arc the two inner points move off the tangent by
+  1.25 a^2 times the arc's curvature vector). It is tangent and curvature-continuous to
+  both paths (C2 in arc length: the joints' accelerations do not jump at the junctions)
+  and, between two lines, it lies inside the sphere of radius ``zone`` about the corner
+  (the convex hull of its control points does: they lie on the two segments from the
+  corner). Its
   orientation blends the two paths' own orientation laws (each continued past its end)
   with a quintic smooth step, so the tool's turning rate is continuous too.
 
@@ -33,13 +35,14 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import CubicSpline
+from scipy.interpolate import CubicHermiteSpline
 from scipy.spatial.transform import Rotation
 
 from workcell.errors import ProgramError
 from workcell.spatial import angle_between
 
 __all__ = [
+    "MAX_TURN",
     "TURN_SCALE",
     "Arc",
     "Blend",
@@ -54,11 +57,13 @@ __all__ = [
 Array = NDArray[np.float64]
 TURN_SCALE = 0.1  # m of path parameter per rad of a pure reorientation
 _TINY = 1e-12
-# the blend's control points E + a t_a, E + b t_a (a = min(0.12 z, b / 3)): b / z by the
-# angle the path turns through, chosen for the smallest peak curvature (within 5 % of the
-# best quintic of this shape up to 160 deg; a circle-like corner, not a kink)
+# the blend's control points E + a t_a, E + b t_a with a = b / 2 and b / z by the angle
+# the path turns through: chosen for a small peak curvature (within ~10 % of the best
+# quintic of this shape) with a curvature that builds up gently from the lines' zero (a
+# smaller a lowers the peak a little but ramps the curvature 10-20 times as steeply:
+# the joints' accelerations would jump at the junctions)
 _TURNS = np.radians([0.0, 30.0, 60.0, 90.0, 120.0, 150.0, 180.0])
-_INNER = np.array([0.75, 0.75, 0.7, 0.6, 0.5, 0.3, 0.1])
+_INNER = np.array([0.75, 0.7, 0.7, 0.65, 0.55, 0.35, 0.1])
 
 
 def slerp(R0: Array, R1: Array, s: Array) -> Array:
@@ -102,6 +107,10 @@ class Piece:
         """Unit tangents (k, 3) of the tool point's path at u."""
         raise NotImplementedError
 
+    def curvatures(self, u: Array) -> Array:
+        """Curvature vectors (k, 3) at u: the principal normal over the radius (1/m)."""
+        raise NotImplementedError
+
 
 class Line(Piece):
     """The straight line p0 -> p1, orientation slerped R0 -> R1 (module doc)."""
@@ -124,6 +133,9 @@ class Line(Piece):
 
     def tangents(self, u: Array) -> Array:
         return np.repeat(self._dir[None], len(u), axis=0)
+
+    def curvatures(self, u: Array) -> Array:
+        return np.zeros((len(u), 3))
 
 
 class Arc(Piece):
@@ -151,6 +163,9 @@ class Arc(Piece):
     def tangents(self, u: Array) -> Array:
         th = np.asarray(u) / self.radius
         return np.outer(-np.sin(th), self.e1) + np.outer(np.cos(th), self.e2)
+
+    def curvatures(self, u: Array) -> Array:
+        return (self.center - self.points(u)) / self.radius**2
 
 
 def arc_through(
@@ -222,18 +237,24 @@ class Blend(Piece):
         zone: float,
         rot_a: Callable[[Array], Array],
         rot_b: Callable[[Array], Array],
+        ka: Array | None = None,
+        kb: Array | None = None,
     ) -> None:
         turn = math.acos(float(np.clip(ta @ tb, -1.0, 1.0)))
         b = float(np.interp(turn, _TURNS, _INNER)) * zone
-        a = min(0.12 * zone, b / 3.0)
-        self.P = np.array([E, E + a * ta, E + b * ta, X - b * tb, X - a * tb, X])
+        a = 0.5 * b
+        # the inner points leave the tangents by 1.25 a^2 times the neighbours' curvature
+        # vectors: the corner starts and ends with their curvature (C2 in arc length)
+        da = 0.0 if ka is None else 1.25 * a * a * ka
+        db = 0.0 if kb is None else 1.25 * a * a * kb
+        self.P = np.array([E, E + a * ta, E + b * ta + da, X - b * tb + db, X - a * tb, X])
         t = np.linspace(0.0, 1.0, self._N)
         speed = np.linalg.norm(self._bezier(t, order=1), axis=1)
-        # arc length by Simpson's rule per table interval, then a smooth (C2) map u -> t
+        # arc length by Simpson's rule per table interval, then a smooth map u -> t
         mid = np.linalg.norm(self._bezier(0.5 * (t[:-1] + t[1:]), order=1), axis=1)
         seg = (speed[:-1] + 4.0 * mid + speed[1:]) * (t[1] - t[0]) / 6.0
         u = np.concatenate([[0.0], np.cumsum(seg)])
-        self._t_of_u = CubicSpline(u, t)
+        self._t_of_u = CubicHermiteSpline(u, t, 1.0 / speed)  # dt/du = 1 / |B'(t)| exactly
         self.length = self.span = float(u[-1])
         self.max_step = self.span / 64.0  # its curvature builds up fast: sample it densely
         self._rot_a, self._rot_b = rot_a, rot_b
@@ -242,8 +263,8 @@ class Blend(Piece):
 
     def _bezier(self, t: Array, order: int = 0) -> Array:
         P = self.P
-        if order == 1:
-            P = 5.0 * np.diff(P, axis=0)
+        for _ in range(order):  # derivative control points
+            P = (len(P) - 1) * np.diff(P, axis=0)
         n = len(P) - 1
         coef = np.array([math.comb(n, k) for k in range(n + 1)], dtype=float)
         t = np.asarray(t)[:, None]
@@ -256,6 +277,13 @@ class Blend(Piece):
     def tangents(self, u: Array) -> Array:
         d = self._bezier(self._t_of_u(np.clip(u, 0.0, self.span)), order=1)
         return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+    def curvatures(self, u: Array) -> Array:
+        t = self._t_of_u(np.clip(u, 0.0, self.span))
+        d1, d2 = self._bezier(t, order=1), self._bezier(t, order=2)
+        sp2 = np.einsum("ij,ij->i", d1, d1)
+        perp = d2 - (np.einsum("ij,ij->i", d2, d1) / sp2)[:, None] * d1
+        return perp / sp2[:, None]
 
     def rotations(self, u: Array) -> Array:
         u = np.asarray(u, dtype=np.float64)
@@ -295,6 +323,9 @@ class _Trimmed(Piece):
     def tangents(self, u: Array) -> Array:
         return self.base.tangents(np.asarray(u) + self.u0)
 
+    def curvatures(self, u: Array) -> Array:
+        return self.base.curvatures(np.asarray(u) + self.u0)
+
 
 class CartesianPath:
     """A chain of pieces; s in [0, ``span``] (m) runs through them in order."""
@@ -332,6 +363,10 @@ class CartesianPath:
         """Unit tangents (k, 3) at s."""
         return self._each(np.clip(s, 0.0, self.span), "tangents", (3,))
 
+    def curvatures(self, s: Array) -> Array:
+        """Curvature vectors (k, 3) at s (1/m, towards the centre of curvature)."""
+        return self._each(np.clip(s, 0.0, self.span), "curvatures", (3,))
+
     def poses(self, s: Array) -> Array:
         """Tool poses (k, 4, 4) at s."""
         s = np.asarray(s, dtype=np.float64)
@@ -363,18 +398,26 @@ class CartesianPath:
         return CartesianPath([*self.pieces, *other.pieces])
 
 
+MAX_TURN = math.radians(170.0)  # a path turning back more sharply has no corner to round
+
+
 def blend_paths(
     a: CartesianPath, b: CartesianPath, zone: float
-) -> tuple[CartesianPath, float, float]:
+) -> tuple[CartesianPath, float, float] | None:
     """``a`` to ``zone`` before its end, the blend, ``b`` from ``zone`` after its start
     (module doc; ``zone`` in m of arc length, at most half of each path). Returns the
-    path and the parameters where the blend starts and ends."""
+    path and the parameters where the blend starts and ends, or None when the path turns
+    back by more than :data:`MAX_TURN` (the tool must stop to reverse)."""
     sa, sb = a.span - zone, zone
     E, C = a.points(np.array([sa, a.span]))
     X = b.points(np.array([sb]))[0]
     ta, tb = a.tangents(np.array([sa]))[0], b.tangents(np.array([sb]))[0]
+    if math.acos(float(np.clip(ta @ tb, -1.0, 1.0))) > MAX_TURN:
+        return None
+    ka, kb = a.curvatures(np.array([sa]))[0], b.curvatures(np.array([sb]))[0]
     blend = Blend(
-        E, ta, C, X, tb, zone, lambda u: a.rotations(sa + u), lambda v: b.rotations(sb + v)
-    )
+        E, ta, C, X, tb, zone, lambda u: a.rotations(sa + u), lambda v: b.rotations(sb + v),
+        ka, kb,
+    )  # fmt: skip
     path = a.sub(0.0, sa).then(CartesianPath([blend])).then(b.sub(sb, b.span))
     return path, sa, sa + blend.span

@@ -40,6 +40,7 @@ from workcell.sim.jerk import Limits
 from workcell.sim.paths import CartesianPath
 
 __all__ = [
+    "FRAME_CHECK_MAX",
     "JOINT_MARGIN",
     "JointPath",
     "PathMotion",
@@ -49,10 +50,11 @@ __all__ = [
     "refine_ik",
     "sample_params",
     "time_path",
+    "timed_frames",
 ]
 
 Array = NDArray[np.float64]
-JOINT_MARGIN = 0.99  # toppra gets the joint limits times this
+JOINT_MARGIN = 0.985  # toppra gets the joint limits times this (room between its knots)
 _UNLIMITED = 1e6  # stands for "no limit" (inf) in toppra's constraints
 _ANGLE_STEP = math.radians(2.0)
 _MIN_GRID = 24
@@ -362,25 +364,29 @@ def joint_path(
     q' and q'' from exact IK at s +- h (one-sided at the ends; m of path parameter)."""
     k = len(Q)
     h = min(h, 0.25 * float(np.min(np.diff(s)))) if k > 1 else h
-    lo = np.where(s - h < 0.0, 0, -1)  # offsets (in h) of the three stencil points
-    lo = np.where(s + h > path.span, -2, lo)
+    # at a junction of pieces the path's third derivative jumps: a shorter stencil there
+    # keeps the central difference of q'' from mixing the two sides
+    hk = np.where(np.isin(s, path.starts[1:-1]), 0.1 * h, h)
+    lo = np.where(s - hk < 0.0, 0, -1)  # offsets (in hk) of the three stencil points
+    lo = np.where(s + hk > path.span, -2, lo)
     offs = lo[:, None] + np.arange(3)[None, :]  # (k, 3)
     R = np.repeat(Q[:, None, :], 3, axis=1)  # the knot itself is known: solve the others
     other = offs != 0
-    ss = (s[:, None] + h * offs)[other]
+    ss = (s[:, None] + hk[:, None] * offs)[other]
     slope = np.gradient(Q, s, axis=0) if k > 2 else np.zeros_like(Q)
-    guess = (Q[:, None, :] + (h * offs)[:, :, None] * slope[:, None, :])[other]
+    guess = (Q[:, None, :] + (hk[:, None] * offs)[:, :, None] * slope[:, None, :])[other]
     J = np.repeat(jacobians(robot, Q)[:, None], 3, axis=1)[other]  # the knot's, for all three
     R[other], _ = refine_ik(robot, guess, base_inv @ path.poses(ss), J=J)
     # derivatives at the stencil point with offset 0 (its index -lo in the stencil)
     c = -lo
+    h2 = (2 * hk)[:, None]
     d1 = np.where(
         (c == 1)[:, None],
-        (R[:, 2] - R[:, 0]) / (2 * h),
-        np.where((c == 0)[:, None], (-3 * R[:, 0] + 4 * R[:, 1] - R[:, 2]) / (2 * h),
-                 (3 * R[:, 2] - 4 * R[:, 1] + R[:, 0]) / (2 * h)),
+        (R[:, 2] - R[:, 0]) / h2,
+        np.where((c == 0)[:, None], (-3 * R[:, 0] + 4 * R[:, 1] - R[:, 2]) / h2,
+                 (3 * R[:, 2] - 4 * R[:, 1] + R[:, 0]) / h2),
     )  # fmt: skip
-    d2 = (R[:, 0] - 2 * R[:, 1] + R[:, 2]) / (h * h)
+    d2 = (R[:, 0] - 2 * R[:, 1] + R[:, 2]) / (hk * hk)[:, None]
     ell = path.tool_length(s)
     ratio = np.gradient(ell, s) if k > 1 else np.ones(k)
     W = np.hstack([Q, ell[:, None]])
@@ -400,20 +406,161 @@ def time_path(
     speed: tuple[Array, Array] | None,
     acceleration: tuple[Array, Array] | None,
     sd_start: float = 0.0,
+    refinements: int = 3,
+    scale: float = 1.0,
 ) -> PathMotion | None:
     """Time ``path`` (module doc) through joint samples Q (k, dof) at ``s_knots`` (k,),
     from path speed ``sd_start`` to rest. ``speed`` (m/s) and ``acceleration`` (m/s^2)
     bound the tool point, each as breakpoints (s, value) interpolated along the path
     (None: only the joints). Returns None when no time law exists (a start speed that
-    cannot be brought to rest)."""
+    cannot be brought to rest). ``scale`` (<= 1) tightens the joints' bounds further.
+
+    The joints' limits are checked again between knots (at the quarters and the middle of
+    each interval, near the ends of intervals where a joint's rate changes fast: exact IK
+    there, the time law's speed and acceleration): where the path bends so fast that a
+    joint would pass its limit between knots (a tight corner, a singularity near), those
+    points become knots and the path is timed again (up to ``refinements`` times)."""
     _toppra()
+    m = JOINT_MARGIN * scale
+    vj = np.where(np.isfinite(limits.speed), limits.speed * m, _UNLIMITED)
+    aj = np.where(np.isfinite(limits.acceleration), limits.acceleration * m, _UNLIMITED)
+    law = None
+    for attempt in range(refinements + 1):
+        law = _time_once(robot, base_inv, path, Q, s_knots, vj, aj, speed, acceleration, sd_start)
+        if law is None or attempt == refinements:
+            return law
+        # check points: the quarters and the middle of every interval
+        idx, frac = _check_points(law.spline)
+        pts = s_knots[idx] + frac * (s_knots[idx + 1] - s_knots[idx])
+        Qm, err = refine_ik(robot, law.spline(pts)[:, :-1], base_inv @ path.poses(pts))
+        if err.max(initial=0.0) > _IK_TOL:
+            return law  # a check point's IK cannot settle: keep the knots' law
+        over = _over_limits(law, joint_path(robot, base_inv, path, Qm, pts), limits, idx, frac)
+        if not over.any():
+            return law
+        order = np.argsort(np.concatenate([s_knots, pts[over]]), kind="stable")
+        s_knots = np.concatenate([s_knots, pts[over]])[order]
+        Q = np.concatenate([Q, Qm[over]])[order]
+    return law
+
+
+FRAME_CHECK_MAX = 200_000  # frames: longer motions are not checked frame by frame
+
+
+def timed_frames(
+    robot: Robot,
+    base_inv: Array,
+    path: CartesianPath,
+    Q: Array,
+    s_knots: Array,
+    dt: float,
+    what: str,
+    *,
+    limits: Limits,
+    speed: tuple[Array, Array] | None,
+    acceleration: tuple[Array, Array] | None,
+    sd_start: float = 0.0,
+    q_before: Array | None = None,
+) -> tuple[PathMotion, Array, Array] | None:
+    """:func:`time_path`, then its frames every ``dt`` (s): (law, local times, rows).
+
+    The frames are the final check: their finite-difference joint speeds and
+    accelerations (from rest at ``q_before``, when given) must keep the limits; where a
+    joint's rate changes too fast even for the checks between knots (a line ending right
+    next to a singularity), the path is timed again with the joints' bounds tightened by
+    the excess (twice at most). Motions of more than :data:`FRAME_CHECK_MAX` frames are
+    not checked this way. None when no time law exists."""
+    from workcell.sim.planning import frames_of
+
+    scale = 1.0
+    for attempt in range(3):
+        law = time_path(
+            robot, base_inv, path, Q, s_knots, limits=limits, speed=speed,
+            acceleration=acceleration, sd_start=sd_start, scale=scale,
+        )  # fmt: skip
+        if law is None:
+            return None
+        t = frames_of(law.duration, dt, what)
+        if len(t) > FRAME_CHECK_MAX:
+            return law, t, None  # type: ignore[return-value]
+        rows = law.positions(t) if len(t) else np.empty((0, Q.shape[1]))
+        if len(t):
+            rows[-1] = Q[-1]
+        ratio = _frame_ratio(t, rows, q_before, limits)
+        if ratio <= 1.0 or attempt == 2:
+            return law, t, rows
+        scale /= ratio * 1.002
+    return None
+
+
+def _frame_ratio(t: Array, rows: Array, q_before: Array | None, limits: Limits) -> float:
+    """The largest finite-difference joint speed or acceleration of frames (over the
+    limits); from rest at ``q_before`` (local time 0) when given."""
+    if q_before is not None:
+        t, rows = np.concatenate([[0.0], t]), np.vstack([q_before, rows])
+    if len(t) < 3:
+        return 0.0
+    dt = np.diff(t)
+    ok = dt > 1e-12
+    v = np.diff(rows, axis=0)[ok] / dt[ok][:, None]
+    tm = (0.5 * (t[1:] + t[:-1]))[ok]
+    a = np.diff(v, axis=0) / np.diff(tm)[:, None]
+    if q_before is not None:  # the rest before the first frame
+        a = np.vstack([v[:1] / tm[:1, None], a])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rv = np.nan_to_num(np.abs(v) / limits.speed).max(initial=0.0)
+        ra = np.nan_to_num(np.abs(a) / limits.acceleration).max(initial=0.0)
+    return float(max(rv, ra))
+
+
+def _check_points(jp: JointPath) -> tuple[NDArray[np.intp], Array]:
+    """Interval index and fraction of the points where :func:`time_path` checks the limits
+    again: each interval's quarters and middle, and near both ends of the intervals over
+    which a joint's rate along the path changes by a third or more (towards a
+    singularity the joints' speeds grow fastest right next to a knot)."""
+    n = len(jp.s) - 1
+    d1 = np.abs(jp.dW[:, :-1])
+    change = np.abs(np.diff(jp.dW[:, :-1], axis=0)) / np.maximum(np.maximum(d1[:-1], d1[1:]), 1e-9)
+    steep = np.flatnonzero(change.max(axis=1) > 1.0 / 3.0)
+    idx = np.concatenate([np.repeat(np.arange(n), 3), np.repeat(steep, 4)])
+    frac = np.concatenate(
+        [np.tile([0.25, 0.5, 0.75], n), np.tile([0.02, 0.1, 0.9, 0.98], len(steep))]
+    )
+    order = np.argsort(idx + frac, kind="stable")
+    return idx[order], frac[order]
+
+
+def _over_limits(
+    law: PathMotion, at: JointPath, limits: Limits, idx: NDArray[np.intp], frac: Array
+) -> NDArray[np.bool_]:
+    """Which check points (interval ``idx``, fraction ``frac``; ``at``: the exact path there)
+    take a joint over its speed or acceleration limit under ``law`` (the path speed squared
+    is linear in s within an interval, the path acceleration constant)."""
+    p = law.profile
+    x = p.sd[idx] ** 2 + frac * (p.sd[idx + 1] ** 2 - p.sd[idx] ** 2)
+    d1, d2 = at.dW[:, :-1], at.ddW[:, :-1]
+    speed = np.abs(d1) * np.sqrt(np.maximum(x, 0.0))[:, None] / limits.speed
+    acc = np.abs(d1 * p.sdd[idx][:, None] + d2 * x[:, None]) / limits.acceleration
+    return (np.nan_to_num(speed) > 1.0).any(axis=1) | (np.nan_to_num(acc) > 1.0).any(axis=1)
+
+
+def _time_once(
+    robot: Robot,
+    base_inv: Array,
+    path: CartesianPath,
+    Q: Array,
+    grid: Array,
+    vj: Array,
+    aj: Array,
+    speed: tuple[Array, Array] | None,
+    acceleration: tuple[Array, Array] | None,
+    sd_start: float,
+) -> PathMotion | None:
+    """toppra's time law over knots ``grid`` (joint bounds vj, aj already with margin)."""
     from toppra import algorithm
 
-    spline = joint_path(robot, base_inv, path, Q, s_knots)
-    vj = np.where(np.isfinite(limits.speed), limits.speed * JOINT_MARGIN, _UNLIMITED)
-    aj = np.where(np.isfinite(limits.acceleration), limits.acceleration * JOINT_MARGIN, _UNLIMITED)
+    spline = joint_path(robot, base_inv, path, Q, grid)
     v, a = np.append(vj, _UNLIMITED), np.append(aj, _UNLIMITED)
-    grid = s_knots
     tool_v = np.full(len(grid), _UNLIMITED) if speed is None else np.interp(grid, *speed)
     tool_a = (
         np.full(len(grid), _UNLIMITED) if acceleration is None else np.interp(grid, *acceleration)
