@@ -4,6 +4,7 @@ MuJoCo kinematics computed here, on the timeline's own qpos."""
 from __future__ import annotations
 
 import copy
+import math
 import socket
 from collections import defaultdict
 from pathlib import Path
@@ -81,7 +82,7 @@ def joints_rec(tmp_path_factory: pytest.TempPathFactory) -> tuple[Simulator, Pat
     sim = thesis_joints.run("path", 0.01)
     path = tmp_path_factory.mktemp("rec") / "joints.rrd"
     rr.set_strict_mode(True)
-    record(sim, path)
+    record(sim, path, fps=None)  # every frame
     return sim, path
 
 
@@ -90,7 +91,7 @@ def cell_rec(tmp_path_factory: pytest.TempPathFactory) -> tuple[Simulator, Path]
     sim = run_cell()
     path = tmp_path_factory.mktemp("rec") / "cell.rrd"
     rr.set_strict_mode(True)
-    record(sim, path, chunk_frames=64)  # several batches
+    record(sim, path, chunk_frames=64, fps=None)  # several batches, every frame
     return sim, path
 
 
@@ -382,8 +383,8 @@ def test_spilled_timeline_records_the_same(tmp_path: Path) -> None:
     sim_mem.timeline = mem
     assert mem.spilled_blocks == 0
     a, b = tmp_path / "spilled.rrd", tmp_path / "memory.rrd"
-    record(sim, a, chunk_frames=1000)  # batches that straddle the timeline's blocks
-    record(sim_mem, b)
+    record(sim, a, chunk_frames=1000, fps=None)  # batches that straddle the timeline's blocks
+    record(sim_mem, b, fps=None)
     ta, tb = _temporal(a), _temporal(b)
     assert ta.keys() == tb.keys()
     assert len(ta) > 10
@@ -458,13 +459,13 @@ def test_live_viewer_options_route_to_grpc(
         return url
 
     monkeypatch.setattr(rerun_log, "_spawn_viewer", fake_spawn)
-    stats = record(sim, tmp_path / "also.rrd", spawn=True, port=12345)
+    stats = record(sim, tmp_path / "also.rrd", spawn=True, port=12345, fps=None)
     assert spawned == [12345]
     assert stats.frames == sim.frames
     assert stats.path == tmp_path / "also.rrd"
     frames, _ = read(tmp_path / "also.rrd", "/joints/puma", "Scalars:scalars")
     assert len(frames) == sim.frames  # the file is complete beside the stream
-    stats = record(sim, connect=url)
+    stats = record(sim, connect=url, fps=None)
     assert stats.path is None
     assert stats.bytes is None
     assert stats.frames == sim.frames
@@ -482,3 +483,44 @@ def test_progress_bar_on_request(
     err = capsys.readouterr().err
     assert err.startswith("\rrecord:")
     assert f"/{sim.frames} [" in err
+
+
+def test_a_1khz_run_is_recorded_at_60_fps_with_its_events_exact(tmp_path: Path) -> None:
+    """The default keeps the first frame of each 1/60 s (plus the ends and every event's
+    frame): about 60 frames per simulated second instead of 1000, at each kept frame the
+    exact timeline pose, every event at its own frame and time."""
+    from workcell.examples import thesis_pick_place as pp
+
+    sim = pp.run("path", 0.001)
+    n, T = sim.frames, sim.sim_time
+    full, slim = tmp_path / "full.rrd", tmp_path / "slim.rrd"
+    a = record(sim, full, fps=None)
+    b = record(sim, slim)
+    assert a.frames == n
+    events = sim.events
+    assert math.floor(T * 60) + 1 <= b.frames <= math.floor(T * 60) + 2 + len(events)
+    assert b.bytes < a.bytes / 8
+    frames, deg = read(slim, "/joints/puma", "Scalars:scalars")
+    assert len(frames) == b.frames
+    times = sim.timeline.sim_times()
+    assert np.all(np.diff(times[frames]) <= 1 / 60 + 0.001 + 1e-9)  # gaps: 1/60 s + dt at most
+    Q = sim.timeline.qpos()
+    adr = sim._qadr["puma"]
+    np.testing.assert_allclose(deg, np.degrees(Q[frames][:, adr]), atol=1e-9)
+    assert {e.frame for e in events} <= set(frames.tolist())
+    ev_frames, _ = read(slim, "/events", "TextLog:text")
+    assert ev_frames.tolist() == sorted(e.frame for e in events)
+    t_ns, _ = read(slim, "/events", "TextLog:text", index="sim_time")
+    assert sorted(t_ns.tolist()) == sorted(round(e.t * 1e9) for e in events)
+    with pytest.raises(RecordError, match="fps must be"):
+        record(sim, tmp_path / "bad.rrd", fps=0)
+
+
+def test_kept_frames_by_hand() -> None:
+    t = np.arange(11) * 0.01  # 100 Hz for 0.1 s
+    keep = rerun_log.kept_frames(t, 50.0)  # every 0.02 s
+    assert np.flatnonzero(keep).tolist() == [0, 2, 4, 6, 8, 10]
+    keep = rerun_log.kept_frames(t, 30.0, np.array([5]))  # 0, 1/30, 2/30, 3/30 s; event at 5
+    assert np.flatnonzero(keep).tolist() == [0, 4, 5, 7, 10]
+    assert rerun_log.kept_frames(t, None).all()
+    assert rerun_log.kept_frames(t, 1000.0).all()

@@ -58,7 +58,7 @@ def _run(args: argparse.Namespace) -> int:
         run_script(args.script, session, echo=args.echo)
     except WorkcellError as exc:
         if session.sim is not None:  # keep what ran, with the error, in the files asked for
-            session.sim.log_error(exc)
+            session.sim._log_error(exc)
             _outputs(args, session.sim)
         raise
     _outputs(args, session.sim)
@@ -84,8 +84,11 @@ def _outputs(args: argparse.Namespace, sim: Any) -> None:
     if args.save:
         from workcell.record import record
 
-        stats = record(sim, args.save)
-        print(f"recording written to {stats.path} (open it with: rerun {stats.path})")
+        stats = record(sim, args.save, fps=args.record_fps or None)
+        print(
+            f"recording written to {stats.path} ({stats.frames} of {sim.frames} frames; "
+            f"open it with: rerun {stats.path})"
+        )
     if args.render:
         from workcell.record import contact_sheet
 
@@ -177,6 +180,9 @@ def register(sub: Any) -> None:
         "limit that set it",
     )
     run.add_argument("--save", metavar="FILE.rrd", help="record the run (also up to an error)")
+    from workcell.cli import add_record_fps
+
+    add_record_fps(run)
     run.add_argument("--render", metavar="FILE.png", help="a contact sheet of the run's key frames")
     run.set_defaults(func=_run)
 

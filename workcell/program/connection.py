@@ -229,7 +229,8 @@ class Connection(socketserver.StreamRequestHandler):
             if req.command == "commands":
                 return {"id": rid, "result": describe_commands()}, False
             cmd = command_class(req.command).from_args(req.args)
-            log.debug("connection %d: request %s: %s", self.cid, clean_log_text(rid), cmd.wire)
+            if log.isEnabledFor(logging.DEBUG):
+                log.debug("connection %d: request %s: %s", self.cid, clean_log_text(rid), cmd.wire)
             return {"id": rid, "result": self.session.execute(cmd)}, False
         except _Closing:
             raise

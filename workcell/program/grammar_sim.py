@@ -93,6 +93,7 @@ def _target(v: dict[str, Any]) -> Target:
 
 
 _ROBOT = Name("robot", "robot")
+_APPROACH = {"approach": Number("approach", "length", what="approach (m)")}
 _JOINTS = Vector("q", None, "joints", robot_key="robot", what="joint values (deg)")
 _ZONE = {"zone": Number("zone", "length", what="zone (m)")}
 _TOOL = {
@@ -118,6 +119,25 @@ def _circular(v: dict[str, Any]) -> simc.MoveCircular:
     )
 
 
+class JointsOrPose(Node):
+    """After ``move joints absolute ROBOT``: joint values (deg; m for a prismatic joint)
+    or the name of one of the robot's poses (``home``)."""
+
+    pose = Name("q", "pose:robot", what="pose name")
+
+    def expects(self, cur: Cursor) -> list[str]:
+        return [*_JOINTS.expects(cur), *self.pose.expects(cur)]
+
+    def match(self, cur: Cursor) -> None:
+        tok = cur.peek()
+        if tok is None and cur.completing:
+            cur.fail("", self.expects(cur))
+        if tok is not None and tok.kind == "word":
+            self.pose.match(cur)
+        else:
+            _JOINTS.match(cur)
+
+
 def _leaf(build: Any, syntax: str, summary: str, example: str) -> Leaf:
     return Leaf(build, syntax, summary, example)
 
@@ -131,13 +151,16 @@ _MOVE = Keys(
         "joints": Keys(
             {
                 "absolute": _robot_leaf(
-                    lambda v: simc.MoveJointsAbsolute(v["robot"], v["q"], v.get("zone", 0.0)),
-                    "move joints absolute ROBOT J1 .. Jn [deg|rad] [zone Z]",
-                    "move the joints to these values (deg, or m for a prismatic joint); "
+                    lambda v: simc.MoveJointsAbsolute(
+                        v["robot"], v["q"], v.get("plan", False), v.get("zone", 0.0)
+                    ),
+                    "move joints absolute ROBOT J1 .. Jn [deg|rad] | POSE [plan] [zone Z]",
+                    "move the joints to these values (deg, or m for a prismatic joint), or "
+                    "to a named pose of the robot (home); plan: along a collision-free path; "
                     "zone: blend into the next move within Z (m) of the end",
-                    "move joints absolute puma -60 0 -70 0 90 30",
-                    _JOINTS,
-                    Options(_ZONE),
+                    "move joints absolute puma -60 0 -70 0 90 30 plan",
+                    JointsOrPose(),
+                    Options({"plan": Set("plan", True), **_ZONE}),
                 ),
                 "relative": _robot_leaf(
                     lambda v: simc.MoveJointsRelative(v["robot"], v["q"], v.get("zone", 0.0)),
@@ -152,13 +175,21 @@ _MOVE = Keys(
         ),
         "end_effector": _robot_leaf(
             lambda v: simc.MoveEndEffector(
-                v["robot"], _target(v), v.get("config"), v.get("zone", 0.0)
+                v["robot"], _target(v), v.get("config"), v.get("plan", False), v.get("zone", 0.0)
             ),
-            f"move end_effector ROBOT {POSE_SYNTAX} [config CFG] [zone Z]",
+            f"move end_effector ROBOT {POSE_SYNTAX} [config CFG] [plan] [zone Z]",
             "move the tool to a pose (inverse kinematics, then a joint move); "
-            "config: Puma solution letters l|r u|d n|f; zone: blend into the next move",
+            "config: Puma solution letters l|r u|d n|f; plan: along a collision-free path; "
+            "zone: blend into the next move",
             "move end_effector puma at 0.4 0 0.3 down",
-            Options({**_POSE, "config": Name("config", what="configuration, e.g. lun"), **_ZONE}),
+            Options(
+                {
+                    **_POSE,
+                    "config": Name("config", what="configuration, e.g. lun"),
+                    "plan": Set("plan", True),
+                    **_ZONE,
+                }
+            ),
         ),
         "linear": _robot_leaf(
             lambda v: _tool_move(
@@ -234,8 +265,8 @@ _CELL = Keys(
             Choice("name", {k: k for k in cellc.EXAMPLES}),
             _leaf(
                 lambda v: cellc.ExampleCell(v["name"]),
-                "cell example joints|pick-place|handoff",
-                "load one of the thesis's example cells (ch. 5)",
+                "cell example joints|pick-place|handoff|obstacle",
+                "load an example cell: the thesis's three (ch. 5), or a wall between two stages",
                 "cell example joints",
             ),
         ),
@@ -340,7 +371,10 @@ def _simulate(v: dict[str, Any]) -> simc.Simulate:
 _SIMULATE_LEAF = _leaf(
     _simulate,
     "simulate [path|joint-by-joint|playback] [dt T] [realtime]",
-    "start simulating the cell (default path, dt 0.01 s)",
+    "start simulating the cell (default path, dt 0.01 s); in joint-by-joint mode the joints "
+    "move one after another, a frame every dt, while the simulated time is the thesis's "
+    "clock (each move lasts its largest joint motion / speed, as in path mode): 'summary' "
+    "shows both",
     "simulate path dt 0.01",
 )
 _SIMULATE = Keys(
@@ -416,12 +450,118 @@ BRANCHES: dict[str, Node] = {
     "open": Keys(
         {
             "gripper": _robot_leaf(
-                lambda v: simc.OpenGripper(v["robot"]),
-                "open gripper ROBOT",
-                "release the part",
+                lambda v: simc.OpenGripper(v["robot"], v.get("settle", False)),
+                "open gripper ROBOT [settle]",
+                "release the part; settle: a part in mid-air drops onto what is below it",
                 "open gripper puma",
+                Options({"settle": Set("settle", True)}),
             )
         }
+    ),
+    "planning": Seq(
+        Options(
+            {
+                "clearance": Number("clearance", "length", what="clearance (m)"),
+                "time": Number("time_limit", "time", what="time limit (s)"),
+                "seed": Number("seed", integer=True, what="seed"),
+                "near": Number("near_clearance", "length", what="near clearance (m)"),
+            }
+        ),
+        _leaf(
+            lambda v: simc.SetPlanning(
+                v.get("clearance"), v.get("time_limit"), v.get("seed"), v.get("near_clearance")
+            ),
+            "planning [clearance L] [time T] [seed N] [near L]",
+            "how planned moves search: clearance L (m, 0.005), time limit T (s, 5) per "
+            "search, random seed N (0), near clearance L (m, 0.001) of task-level close work; "
+            "shows the settings",
+            "planning clearance 5mm time 5 seed 0",
+        ),
+    ),
+    "pick": Seq(
+        Name("part", "movable", what="movable part"),
+        Keys(
+            {
+                "with": Seq(
+                    _ROBOT,
+                    Options(_APPROACH),
+                    _leaf(
+                        lambda v: simc.Pick(v["robot"], v["part"], v.get("approach", 0.08)),
+                        "pick PART with ROBOT [approach L]",
+                        "grasp a part: grasp pose, configuration and a collision-free path "
+                        "chosen automatically; approach and retreat L (m, 0.08) along the "
+                        "tool axis",
+                        "pick cube with puma",
+                    ),
+                )
+            }
+        ),
+    ),
+    "place": Seq(
+        Name("part", "movable", what="movable part"),
+        Keys(
+            {
+                "on": Seq(
+                    Name("on", "part", what="support (a part)"),
+                    Keys(
+                        {
+                            "with": Seq(
+                                _ROBOT,
+                                Options(
+                                    {
+                                        "at": Vector("position", 2, "length", what="x y (m)"),
+                                        **_APPROACH,
+                                    }
+                                ),
+                                _leaf(
+                                    lambda v: simc.Place(
+                                        v["robot"],
+                                        v["part"],
+                                        v["on"],
+                                        v.get("position"),
+                                        v.get("approach", 0.08),
+                                    ),
+                                    "place PART on SUPPORT with ROBOT [at X Y] [approach L]",
+                                    "put a held part down resting on a support, its centroid "
+                                    "over X Y (m; default the centre of the support's top), "
+                                    "release it, retreat",
+                                    "place cube on stage_1 with puma",
+                                ),
+                            )
+                        }
+                    ),
+                )
+            }
+        ),
+    ),
+    "handover": Seq(
+        Name("part", "movable", what="movable part"),
+        Keys(
+            {
+                "from": Seq(
+                    Name("giver", "robot", what="robot holding it"),
+                    Keys(
+                        {
+                            "to": Seq(
+                                Name("receiver", "robot", what="robot taking it"),
+                                Options(_APPROACH),
+                                _leaf(
+                                    lambda v: simc.Handover(
+                                        v["giver"],
+                                        v["receiver"],
+                                        v["part"],
+                                        v.get("approach", 0.08),
+                                    ),
+                                    "handover PART from GIVER to RECEIVER [approach L]",
+                                    "hand a part over at a meeting pose found in both workspaces",
+                                    "handover sphere from puma_1 to puma_2",
+                                ),
+                            )
+                        }
+                    ),
+                )
+            }
+        ),
     ),
     "wait": Seq(
         Number("seconds", "time", what="seconds"),
@@ -478,7 +618,7 @@ BRANCHES: dict[str, Node] = {
         lambda v: simc.Summary(), "summary", "simulated and wall time, frames, events"
     ),
     "positions": _query(
-        lambda v: simc.PartPositions(), "positions", "movable parts' positions (m)"
+        lambda v: simc.PartPositions(), "positions", "movable parts' centroids (m)"
     ),
 }
 
@@ -497,6 +637,7 @@ ALIASES: dict[str, Node] = {
     "open_gripper": BRANCHES["open"].branches["gripper"],  # type: ignore[attr-defined]
     "set_speed": BRANCHES["speed"],
     "set_mode": BRANCHES["mode"],
+    "set_planning": BRANCHES["planning"],
     "tool_pose": BRANCHES["pose"],
     "sim_time": BRANCHES["time"].empty,  # type: ignore[attr-defined]
 }

@@ -27,8 +27,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell.cell.workcell import RobotPlacement
-from workcell.checks import is_finite_number
-from workcell.errors import GeometryError, KinematicsError, ProgramError, UnreachableError
+from workcell.checks import is_finite_number, quote_angle, quote_length
+from workcell.errors import (
+    GeometryError,
+    KinematicsError,
+    PlanningError,
+    ProgramError,
+    UnreachableError,
+)
 from workcell.robots.ik_closed import CONFIGS, config_of, ik_batch, ik_report
 from workcell.robots.robot import Robot
 from workcell.sim.cycle import command_record
@@ -42,6 +48,7 @@ __all__ = [
     "CartesianCommands",
     "line_deviation",
     "line_waypoints",
+    "pose_solutions",
     "solve_pose",
     "world_target",
 ]
@@ -57,7 +64,7 @@ def world_target(T: ArrayLike, command: str, robot: str) -> Array:
         raise KinematicsError(str(exc)) from exc
 
 
-def _closed_form(placement: RobotPlacement, Tb: Array, q: Array, config: str | None) -> Array:
+def _closed_form(placement: RobotPlacement, Tb: Array, q: Array, config: str | None) -> list[Array]:
     sols, reason = ik_report(placement.robot, Tb, q)
     ok = [s for s in sols if s.within_limits]
     if config is not None:
@@ -72,19 +79,19 @@ def _closed_form(placement: RobotPlacement, Tb: Array, q: Array, config: str | N
             )
     if not ok:
         raise UnreachableError(reason or "no solution within the joint limits")
-    return min(ok, key=lambda s: float(np.abs(s.q - q).max())).q
+    return [s.q for s in sorted(ok, key=lambda s: float(np.abs(s.q - q).max()))]
 
 
-def solve_pose(
+def pose_solutions(
     placement: RobotPlacement, T_world: Array, q_current: Array, config: str | None = None
-) -> Array:
-    """Joint values (rad/m) putting the tool at ``T_world``, nearest to ``q_current``.
+) -> list[Array]:
+    """Every joint solution (rad/m) putting the tool at ``T_world`` within the limits,
+    nearest to ``q_current`` first (in the largest joint change, so the one a joint move
+    reaches soonest: eq. 4.27's duration is proportional to it).
 
-    Nearest in the largest joint change, so the one a joint move reaches soonest
-    (eq. 4.27's duration is proportional to it).
-
-    ``config``: configuration letters to require (any of l|r, u|d, n|f, e.g. "ru").
-    Raises UnreachableError with the reason.
+    Closed-form families (``Robot.ik_family``) give all of them; other robots give the
+    one :meth:`Robot.ik` finds from ``q_current``. ``config``: configuration letters to
+    require (any of l|r, u|d, n|f, e.g. "ru"). Raises UnreachableError with the reason.
     """
     if config is not None and (
         not isinstance(config, str) or not config or set(config) - set("lrudnf")
@@ -92,18 +99,28 @@ def solve_pose(
         raise KinematicsError(
             f"config must be letters of l|r, u|d, n|f (e.g. 'run'), got {config!r}"
         )
-    return _solve_base(placement, invert(placement.base) @ T_world, q_current, config)
+    return _solutions_base(placement, invert(placement.base) @ T_world, q_current, config)
 
 
-def _solve_base(placement: RobotPlacement, Tb: Array, q: Array, config: str | None) -> Array:
-    """:func:`solve_pose` for a pose ``Tb`` in the robot's base frame."""
+def _solutions_base(
+    placement: RobotPlacement, Tb: Array, q: Array, config: str | None
+) -> list[Array]:
+    """:func:`pose_solutions` for a pose ``Tb`` in the robot's base frame."""
     robot = placement.robot
     if robot.ik_family is not None:
         return _closed_form(placement, Tb, q, config)
     sol = robot.ik(Tb, q, config=config)
     if not sol.success:
         raise UnreachableError(sol.reason or "numerical IK did not converge")
-    return sol.q
+    return [sol.q]
+
+
+def solve_pose(
+    placement: RobotPlacement, T_world: Array, q_current: Array, config: str | None = None
+) -> Array:
+    """The joint values (rad/m) putting the tool at ``T_world`` nearest to ``q_current``:
+    the first of :func:`pose_solutions`. Raises UnreachableError with the reason."""
+    return pose_solutions(placement, T_world, q_current, config)[0]
 
 
 def path_joints(
@@ -129,7 +146,7 @@ def path_joints(
         start, prev = _closed_form_samples(robot, Tb, q0, keep, Q, max_jump)
     for k in range(start, len(poses)):
         try:
-            q = _solve_base(placement, Tb[k], prev, keep)
+            q = _solutions_base(placement, Tb[k], prev, keep)[0]
         except UnreachableError as exc:
             raise UnreachableError(f"{_where(fractions[k], poses[k], what)}: {exc}") from exc
         jump = np.abs(q - prev)
@@ -166,7 +183,7 @@ def _closed_form_samples(
 ) -> tuple[int, Array]:
     """Fill Q with the closed form's solutions of shoulder and elbow configuration
     ``keep``, each the in-limit 2 pi-equivalent nearest the previous sample (as
-    :func:`_solve_base` picks them). Vectorised: one configuration followed along the
+    :func:`_solutions_base` orders them). Vectorised: one configuration followed along the
     whole path, kept when at every sample it is the nearest; else sample by sample.
     Stops at the first sample without a solution or with a joint jump over ``max_jump``.
     Returns (samples done, last q)."""
@@ -262,21 +279,35 @@ class CartesianCommands:
     """``move_end_effector`` and ``move_straight_line`` (a mixin of Simulator)."""
 
     def move_end_effector(
-        self, robot: str, T: ArrayLike, config: str | None = None, *, zone: float = 0.0
+        self,
+        robot: str,
+        T: ArrayLike,
+        config: str | None = None,
+        *,
+        zone: float = 0.0,
+        plan: bool = False,
     ) -> None:
         """Move the tool to the world pose ``T`` (4x4, m): IK, then a joint move.
 
         ``config``: configuration letters to require (e.g. "ru"); default: the
         in-limit solution nearest the current joints. ``zone`` (m): blend into the next
-        move. Raises UnreachableError saying why.
+        move. Raises UnreachableError saying why. With ``plan``, a collision-free joint
+        path to the nearest solution that has one (:mod:`workcell.plan.motion`; it stops
+        at its end: no zone); PlanningError when the pose is unreachable, every solution
+        is in collision or no path is found.
         """
         name = self._robot(robot)
         target = world_target(T, "move_end_effector", name)
         try:
-            q = solve_pose(self.cell.robots[name], target, self.joints(name), config)
+            sols = pose_solutions(self.cell.robots[name], target, self.joints(name), config)
         except UnreachableError as exc:
+            if plan:
+                raise PlanningError(f"move_end_effector '{name}': goal unreachable: {exc}") from exc
             raise UnreachableError(f"move_end_effector '{name}': {exc}") from exc
-        self._move(name, q, "move_end_effector", zone)
+        if plan:
+            self._move_planned(name, sols, "move_end_effector")
+        else:
+            self._move(name, sols[0], "move_end_effector", zone)
 
     def move_straight_line(
         self, robot: str, T: ArrayLike, step: float = 0.005, *, max_jump: float = math.radians(10)
@@ -294,9 +325,9 @@ class CartesianCommands:
         command = "move_straight_line"
         name = self._robot(robot)
         target = world_target(T, command, name)
-        for what, v in (("step", step), ("max_jump", max_jump)):
+        for what, v, quote in (("step", step, quote_length), ("max_jump", max_jump, quote_angle)):
             if not (is_finite_number(v) and v > 0):
-                raise ProgramError(f"{command} '{name}': {what} must be > 0, got {v!r}")
+                raise ProgramError(f"{command} '{name}': {what} must be > 0, got {quote(v)}")
         placement = self.cell.robots[name]
         start = self.tool_pose(name)
         length = float(np.linalg.norm(target[:3, 3] - start[:3, 3]))

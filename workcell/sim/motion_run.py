@@ -63,8 +63,18 @@ class MotionRunner:
             raise ProgramError(f"{command} '{name}': zone must be a number of m >= 0, got {zone!r}")
         return float(zone)  # type: ignore[arg-type]
 
-    def _plan(self: Simulator, name: str, q0: Array, target: Array, command: str) -> Motion:
-        """One joint move of robot ``name`` (see :mod:`workcell.sim.planning`)."""
+    def _plan(
+        self: Simulator,
+        name: str,
+        q0: Array,
+        target: Array,
+        command: str,
+        *,
+        together: bool = False,
+    ) -> Motion:
+        """One joint move of robot ``name`` (see :mod:`workcell.sim.planning`), in local
+        time; ``together``: all joints at once whatever the mode (a planned path's
+        segments)."""
         f = self._override[name]
         limits = None
         if self.profile == "jerk":
@@ -75,7 +85,7 @@ class MotionRunner:
             target,
             speed=self._speed[name] * f,
             dt=self.dt,
-            joint_by_joint=self.mode == "joint-by-joint",
+            joint_by_joint=self.mode == "joint-by-joint" and not together,
             clock=self.joint_by_joint_clock,
             profile=self.profile,
             acceleration=self.acceleration * f * f,
@@ -83,13 +93,17 @@ class MotionRunner:
             what=f"{command} '{name}'",
         )
 
+    def _check_target(self: Simulator, name: str, target: Array, command: str) -> None:
+        """JointLimitError when ``target`` (rad/m) is outside the robot's joint limits."""
+        try:
+            self.cell.robots[name].robot.check_limits(target)
+        except JointLimitError as exc:
+            raise JointLimitError(f"{command} '{name}': target refused: {exc}") from exc
+
     def _move(self: Simulator, name: str, target: Array, command: str, zone: float = 0.0) -> None:
         """A joint move to ``target`` (rad/m), blending out of the robot's pending move."""
         placement = self.cell.robots[name]
-        try:
-            placement.robot.check_limits(target)
-        except JointLimitError as exc:
-            raise JointLimitError(f"{command} '{name}': target refused: {exc}") from exc
+        self._check_target(name, target, command)
         z = self._zone(command, name, zone)
         q0 = self.joints(name)
         motion = self._plan(name, q0, target, command)

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from workcell.cell.compile import CompiledCell
 from workcell.cell.workcell import Workcell
 from workcell.sim.timeline import Event, Timeline
+from workcell.spatial import pose_from_pos_quat
 
 __all__ = ["PhysicsResult", "SettledPart", "Tracking"]
 
@@ -187,8 +188,14 @@ class PhysicsResult:
         return self.sim_time / self.wall_time if self.wall_time > 0 else float("inf")
 
     def part_positions(self) -> dict[str, list[float]]:
-        """World position (m) of each movable part's body frame at the end, by name."""
-        return {p: s.position.tolist() for p, s in self.parts.items()}
+        """World position (m) of each movable part's centroid at the end, by name (as
+        :meth:`Simulator.part_positions <workcell.sim.simulator.Simulator.part_positions>`)."""
+        return {
+            p: (pose_from_pos_quat(s.position, s.quat) @ self.cell.centroid_frame(p))[
+                :3, 3
+            ].tolist()
+            for p, s in self.parts.items()
+        }
 
     def summary(self) -> dict[str, Any]:
         """The DESIGN.md ``workcell demo --json`` fields, plus ``physics``: timestep,

@@ -63,6 +63,12 @@ Several robots at once (beyond the thesis; :mod:`workcell.sim.concurrent`): insi
 ``with sim.concurrently():`` each robot's motion commands start together and the frames
 are merged, so the clock advances by the longest robot's time.
 
+Planning and task level (beyond the thesis; :mod:`workcell.plan`): ``plan=True`` on
+``move_joints_absolute`` and ``move_end_effector`` moves along a collision-free path
+(OMPL), ``pick``, ``place`` and ``handover`` choose poses, configurations and paths
+themselves; a part released in mid-air gets a ``warning`` event, or drops onto what is
+below it with ``open_gripper(..., settle=True)``.
+
 Profiles (``profile``; :mod:`workcell.sim.profiles`): the thesis's constant speed
 ("linear"), or, beyond the thesis, "trapezoid" (``acceleration`` rad/s^2) or "quintic",
 for joint moves and ``move_end_effector``; the simulated clock then runs by the
@@ -91,11 +97,14 @@ from numpy.typing import ArrayLike, NDArray
 from workcell import limits
 from workcell.cell.compile import CompiledCell, compile_cell
 from workcell.cell.workcell import Workcell
-from workcell.checks import is_finite_number
+from workcell.checks import is_finite_number, quote_angle
 from workcell.errors import (
     CollisionError,
     ProgramError,
 )
+from workcell.plan.motion import PlanningCommands
+from workcell.plan.resting import RestingCommands
+from workcell.plan.tasks import TaskCommands
 from workcell.sim import profiles
 from workcell.sim.blending import Pending
 from workcell.sim.cartesian import CartesianCommands
@@ -120,7 +129,15 @@ JOINT_BY_JOINT_CLOCKS = ("thesis", "sequential")
 Array = NDArray[np.float64]
 
 
-class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCommands):
+class Simulator(
+    MotionCommands,
+    CartesianCommands,
+    GripperCommands,
+    ConcurrentCommands,
+    PlanningCommands,
+    RestingCommands,
+    TaskCommands,
+):
     """Kinematic simulator of a workcell (see the module doc).
 
     ``mode``: "path", "joint-by-joint" or "playback"; ``dt`` the sampling interval dT
@@ -281,8 +298,13 @@ class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCo
         return self.timeline.sim_times(), self.timeline.qpos()[:, adr]
 
     def part_positions(self) -> dict[str, list[float]]:
-        """World position (m) of each movable part's body frame, by name."""
-        return {p: self.data.xpos[b].tolist() for p, b in self._part_body.items()}
+        """World position (m) of each movable part's centroid, by name: the point grasps
+        aim at and ``place`` sets down (``part_pose`` gives the part frame's pose)."""
+        d = self.data
+        return {
+            p: (d.xpos[b] + d.xmat[b].reshape(3, 3) @ self._centroids[p]).tolist()
+            for p, b in self._part_body.items()
+        }
 
     def clearance(self, a: str, b: str) -> float:
         """Minimum distance (m) between two things now; negative: penetration depth.
@@ -315,19 +337,36 @@ class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCo
         top = float(np.max(self.cell.robots[name].robot.max_speeds))
         if not (is_finite_number(speed) and 0 < float(speed) <= top):
             raise ProgramError(
-                f"set_speed '{name}': speed must be a number in (0, {top:.4g}] rad/s "
-                f"(the fastest joint's limit), got {speed!r}"
+                f"set_speed '{name}': speed must be > 0 and at most {quote_angle(top, '/s')} "
+                f"(the fastest joint's limit), got {quote_angle(speed, '/s')}"
             )
         with self._transaction():
             self._speed[name] = float(speed)
             self.timeline.add_event(self.sim_time, name, "speed", f"speed {float(speed):.6g} rad/s")
 
-    def move_joints_absolute(self, robot: str, q: ArrayLike, *, zone: float = 0.0) -> None:
-        """Move the robot's joints to ``q`` (rad/m) in the simulator's mode; ``zone`` (m):
-        blend into the next move (:mod:`workcell.sim.blending`)."""
+    def move_joints_absolute(
+        self, robot: str, q: ArrayLike | str, *, zone: float = 0.0, plan: bool = False
+    ) -> None:
+        """Move the robot's joints to ``q`` (rad/m), or to one of its named poses
+        (``"home"``), in the simulator's mode; ``zone`` (m): blend into the next move
+        (:mod:`workcell.sim.blending`); with ``plan``, along a collision-free path
+        (:mod:`workcell.plan.motion`; PlanningError when none; a planned path stops at
+        its end: no zone)."""
         name = self._robot(robot)
+        if isinstance(q, str):
+            poses = self.cell.robots[name].robot.poses
+            if q not in poses:
+                raise ProgramError(
+                    f"move_joints_absolute '{name}': no pose {q!r}; "
+                    f"named poses: {', '.join(poses) or 'none'}"
+                )
+            q = poses[q]
         target = self._vector(name, q, "move_joints_absolute", "q")
-        self._move(name, target, "move_joints_absolute", zone)
+        if plan:
+            self._check_target(name, target, "move_joints_absolute")
+            self._move_planned(name, [target], "move_joints_absolute")
+        else:
+            self._move(name, target, "move_joints_absolute", zone)
 
     def move_joints_relative(self, robot: str, dq: ArrayLike, *, zone: float = 0.0) -> None:
         """Move the robot's joints by ``dq`` (rad/m) in the simulator's mode; ``zone`` (m)
@@ -360,7 +399,7 @@ class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCo
             rec = command_record(None, "wait", self.sim_time - s, s, "wait")
             self.timeline.add_event(self.sim_time, None, "wait", f"wait {s:.6g} s", data=rec)
 
-    def log_error(self, exc: BaseException, robot: str | None = None) -> None:
+    def _log_error(self, exc: BaseException, robot: str | None = None) -> None:
         """Note on the timeline that the program stopped on ``exc``: an ``error`` event
         (its type and message) at the current time. The failed command itself changed
         nothing; this is for runners that record or report the run up to the error."""
@@ -420,7 +459,7 @@ class Simulator(MotionCommands, CartesianCommands, GripperCommands, ConcurrentCo
         if a.shape != (n,):
             got = f"{a.size} value(s)" if a.ndim == 1 else f"an array of shape {a.shape}"
             raise ProgramError(
-                f"{command} '{name}': {what} must be {n} numbers (rad/m, one per joint), got {got}"
+                f"{command} '{name}': {what} must be {n} joint values (one per joint), got {got}"
             )
         if not np.all(np.isfinite(a)):
             raise ProgramError(f"{command} '{name}': {what} must be finite, got {a.tolist()}")
