@@ -47,20 +47,20 @@ def python_program(sim) -> None:
 
 
 def test_the_language_reads_tool_speeds_accelerations_zones_and_percentages():
-    (m,) = parse_line(PROGRAM[5])
+    (m,) = list(parse_line(PROGRAM[5]))
     assert isinstance(m, simc.MoveLinear)
     assert (m.speed, m.acceleration, m.zone) == pytest.approx((0.25, 0.8, 0.02))
-    (c,) = parse_line(PROGRAM[6])
+    (c,) = list(parse_line(PROGRAM[6]))
     assert c.via.position == (0.36, 0.03, 0.56)
     assert (c.speed, c.acceleration, c.zone) == (0.25, None, 0.0)
-    assert parse_line("override puma 25")[0].override == pytest.approx(0.25)
-    assert parse_line("profile trapezoid acceleration 90 deg/s^2")[0].acceleration == (
+    assert next(iter(parse_line("override puma 25"))).override == pytest.approx(0.25)
+    assert next(iter(parse_line("profile trapezoid acceleration 90 deg/s^2"))).acceleration == (
         pytest.approx(math.pi / 2)
     )
-    assert parse_line("profile jerk")[0].profile == "jerk"
-    assert parse_line("move joints relative puma 10 0 0 0 0 0 zone 5 mm")[0].zone == 0.005
-    assert isinstance(parse_line("time detail")[0], simc.CycleTime)
-    assert isinstance(parse_line("time")[0], simc.SimTime)
+    assert next(iter(parse_line("profile jerk"))).profile == "jerk"
+    assert next(iter(parse_line("move joints relative puma 10 0 0 0 0 0 zone 5 mm"))).zone == 0.005
+    assert isinstance(next(iter(parse_line("time detail"))), simc.CycleTime)
+    assert isinstance(next(iter(parse_line("time"))), simc.SimTime)
 
 
 @pytest.mark.parametrize(
@@ -75,7 +75,7 @@ def test_the_language_reads_tool_speeds_accelerations_zones_and_percentages():
 )
 def test_language_mistakes_say_what_is_valid(line, error, match):
     with pytest.raises(error, match=match):
-        parse_line(line)
+        list(parse_line(line))
 
 
 def test_a_session_runs_the_program_as_python_does():
