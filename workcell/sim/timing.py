@@ -66,10 +66,12 @@ def sample_params(path: CartesianPath, step: float) -> Array:
     """Path parameters of the IK samples: each piece cut into equal parts at most
     ``step`` (m; a curved piece's own ``max_step`` if shorter) and 2 deg of turn long
     (the start included), and at least 24 of them in all (toppra's grid)."""
+    kinds = {type(p).__name__ for p in path.pieces}
+    what = {"Line": "line", "Arc": "arc"}.get(kinds.pop(), "path") if len(kinds) == 1 else "path"
     work_limits.check(
         "max_frames_per_command",
         path.span / step,
-        f"a {path.span:.4g} m path sampled every {step:g} m",
+        f"a {path.span:.4g} m {what} sampled every {step:g} m",
     )
     out = [np.zeros(1)]
     step = min(step, path.span / (_MIN_GRID - 1)) if path.span > 0 else step
