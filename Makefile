@@ -26,6 +26,7 @@ bench: $(STAMP)
 	$(BIN)/python scripts/bench_record.py
 	$(BIN)/python scripts/bench_server.py
 	$(BIN)/python scripts/bench_study.py
+	$(BIN)/python scripts/bench_motion.py
 	$(BIN)/python scripts/bench_plan.py
 
 clean:

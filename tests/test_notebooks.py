@@ -96,7 +96,9 @@ def check_quickstart(out: str) -> None:
     # placed centred on the 100 mm stage at (0.25, 0.25), top 0.4 + 0.08 m: its centroid
     # half the 40 mm cube above, its frame (a corner) half the cube below and beside that
     assert _vector(out, "part centroid at (m):") == pytest.approx([0.25, 0.25, 0.50], abs=1e-9)
-    assert _vector(out, "part frame (a corner) at (m):") == pytest.approx([0.23, 0.23, 0.48], abs=1e-9)
+    assert _vector(out, "part frame (a corner) at (m):") == pytest.approx(
+        [0.23, 0.23, 0.48], abs=1e-9
+    )
 
 
 def check_build_your_own_cell(out: str) -> None:

@@ -58,6 +58,7 @@ _KEEPS_CELL = frozenset(
     {
         "cell_data", "set_speed", "set_mode", "move_joints_absolute", "move_joints_relative",
         "move_end_effector", "move_straight_line", "close_gripper", "open_gripper", "wait",
+        "move_linear", "move_circular", "set_override", "set_profile", "cycle_time",
         "pick", "place", "handover", "set_planning",
         "play", "joints", "tool_pose", "held", "clearance", "summary", "part_positions",
         "robots", "frames", "sim_time", "events", "hello", "part_pose", "gripper_pose",
@@ -190,25 +191,77 @@ class Client:
         self.call("set_mode", mode=mode)
 
     def move_joints_absolute(
-        self, robot: str, q: ArrayLike | str, *, plan: bool = False
+        self, robot: str, q: ArrayLike | str, *, zone: float = 0.0, plan: bool = False
     ) -> None:
         """Move the joints to ``q`` (rad/m), or to a named pose of the robot ("home");
-        ``plan``: along a collision-free path."""
-        self.call("move_joints_absolute", robot=robot, q=_list(q), plan=plan)
+        ``zone`` (m): blend into the next move; ``plan``: along a collision-free path."""
+        self.call("move_joints_absolute", robot=robot, q=_list(q), zone=zone, plan=plan)
 
-    def move_joints_relative(self, robot: str, dq: ArrayLike) -> None:
-        """Move the joints by ``dq`` (rad/m)."""
-        self.call("move_joints_relative", robot=robot, dq=_list(dq))
+    def move_joints_relative(self, robot: str, dq: ArrayLike, *, zone: float = 0.0) -> None:
+        """Move the joints by ``dq`` (rad/m); ``zone`` (m): blend into the next move."""
+        self.call("move_joints_relative", robot=robot, dq=_list(dq), zone=zone)
 
     def move_end_effector(
-        self, robot: str, T: ArrayLike, config: str | None = None, *, plan: bool = False
+        self,
+        robot: str,
+        T: ArrayLike,
+        config: str | None = None,
+        *,
+        zone: float = 0.0,
+        plan: bool = False,
     ) -> None:
-        """Move the tool to world pose ``T`` (4x4, m); ``plan``: along a collision-free path."""
-        self.call("move_end_effector", robot=robot, T=_list(T), config=config, plan=plan)
+        """Move the tool to world pose ``T`` (4x4, m); ``zone`` (m): blend into the next
+        move; ``plan``: along a collision-free path."""
+        self.call("move_end_effector", robot=robot, T=_list(T), config=config, zone=zone, plan=plan)
 
     def move_straight_line(self, robot: str, T: ArrayLike, step: float = 0.005) -> None:
         """Move the tool along a straight line to ``T`` (4x4), samples ``step`` (m) apart."""
         self.call("move_straight_line", robot=robot, T=_list(T), step=step)
+
+    def move_linear(
+        self,
+        robot: str,
+        T: ArrayLike,
+        *,
+        speed: float,
+        acceleration: float | None = None,
+        zone: float = 0.0,
+    ) -> None:
+        """Move the tool point along a line to ``T`` (4x4) at ``speed`` (m/s),
+        ``acceleration`` (m/s^2, default 1.2); ``zone`` (m): blend into the next move."""
+        self.call(
+            "move_linear", robot=robot, T=_list(T), speed=speed,
+            acceleration=acceleration, zone=zone,
+        )  # fmt: skip
+
+    def move_circular(
+        self,
+        robot: str,
+        via: ArrayLike,
+        T: ArrayLike,
+        *,
+        speed: float,
+        acceleration: float | None = None,
+        zone: float = 0.0,
+    ) -> None:
+        """Move the tool point along the arc through ``via`` (a point (3,) or a pose) to
+        ``T`` (4x4) at ``speed`` (m/s)."""
+        self.call(
+            "move_circular", robot=robot, via=_list(via), T=_list(T), speed=speed,
+            acceleration=acceleration, zone=zone,
+        )  # fmt: skip
+
+    def set_override(self, robot: str, override: float) -> None:
+        """Set the robot's speed override, 0 < f <= 1."""
+        self.call("set_override", robot=robot, override=override)
+
+    def set_profile(self, profile: str, acceleration: float | None = None) -> None:
+        """Set the joint-move profile: linear, trapezoid, quintic or jerk."""
+        self.call("set_profile", profile=profile, acceleration=acceleration)
+
+    def cycle_time(self) -> dict[str, Any]:
+        """The cycle-time report: ``total_s`` and the records of ``commands``."""
+        return self.call("cycle_time")
 
     def close_gripper(
         self, robot: str, max_distance: float = 0.02, max_angle: float = math.radians(10)

@@ -83,7 +83,7 @@ def test_hello_says_protocol_version_and_bound(server):
     assert raw.ask({"id": "a", "command": "hello", "args": {"version": 1}})["id"] == "a"
     r = raw.ask({"id": 7, "command": "commands"})
     mja = next(c for c in r["result"] if c["name"] == "move_joints_absolute")
-    assert [a["name"] for a in mja["args"]] == ["robot", "q", "plan"]
+    assert [a["name"] for a in mja["args"]] == ["robot", "q", "plan", "zone"]
     assert raw.ask({"id": 8, "command": "bye"}) == {"id": 8, "result": None}
     assert raw.r.readline() == b""  # closed after bye
     raw.close()

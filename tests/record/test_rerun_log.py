@@ -150,6 +150,7 @@ def test_entity_paths(cell_rec: tuple[Simulator, Path]) -> None:
     m = sim.model
     body = [m.body(b).name for b in range(m.nbody)]
     expected = {"/world", "/events", "/joints/arm", "/joints/plain", "/gripper/arm"}
+    expected |= {f"/joint_{k}/{r}" for k in ("speeds", "accelerations") for r in ("arm", "plain")}
     expected |= {"/world/tool_paths/arm", "/world/tool_paths/plain"}
     expected |= {f"/world/bodies/{b}" for b in body[1:]}
     expected |= {
@@ -211,6 +212,26 @@ def test_joint_series_equal_timeline_qpos(cell_rec: tuple[Simulator, Path]) -> N
         names = read_static(path, f"/joints/{robot}", "SeriesLines:names").ravel().tolist()
         assert names == [f"j{i} (deg)" for i in range(1, 7)]
     assert np.ptp(deg[:, 0]) == pytest.approx(30.0)  # plain's joint 1 moved by -30 deg
+
+
+def test_joint_speed_and_acceleration_series(cell_rec: tuple[Simulator, Path]) -> None:
+    sim, path = cell_rec
+    m = sim.model
+    t, Q = sim.timeline.sim_times(), sim.timeline.qpos()
+    adr = [m.jnt_qposadr[m.joint(f"plain.j{i}").id] for i in range(1, 7)]
+    _, v = read(path, "/joint_speeds/plain", "Scalars:scalars")
+    _, a = read(path, "/joint_accelerations/plain", "Scalars:scalars")
+    q = np.degrees(Q[:, adr])
+    k = next(i for i in range(2, len(t)) if t[i] > t[i - 1] > t[i - 2])  # three distinct times
+    v_k = (q[k] - q[k - 1]) / (t[k] - t[k - 1])  # backward differences, by hand
+    v_j = (q[k - 1] - q[k - 2]) / (t[k - 1] - t[k - 2])
+    np.testing.assert_allclose(v[k], v_k, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(a[k], (v_k - v_j) / ((t[k] - t[k - 2]) / 2), rtol=1e-9, atol=1e-6)
+    assert np.all(v[0] == 0)
+    names = read_static(path, "/joint_speeds/plain", "SeriesLines:names").ravel().tolist()
+    assert names == [f"j{i} (deg/s)" for i in range(1, 7)]
+    names = read_static(path, "/joint_accelerations/plain", "SeriesLines:names").ravel().tolist()
+    assert names == [f"j{i} (deg/s^2)" for i in range(1, 7)]
 
 
 def test_tool_path_segments(cell_rec: tuple[Simulator, Path]) -> None:
@@ -305,6 +326,10 @@ def test_blueprint_stored(cell_rec: tuple[Simulator, Path]) -> None:
         ("3D", "/world"),
         ("TimeSeries", "/joints/arm"),
         ("TimeSeries", "/joints/plain"),
+        ("TimeSeries", "/joint_speeds/arm"),
+        ("TimeSeries", "/joint_speeds/plain"),
+        ("TimeSeries", "/joint_accelerations/arm"),
+        ("TimeSeries", "/joint_accelerations/plain"),
         ("TimeSeries", "/gripper"),
         ("TextLog", "/events"),
     }
@@ -351,7 +376,7 @@ def test_spilled_timeline_records_the_same(tmp_path: Path) -> None:
             tl.qpos(done, e.frame + 1),
         )
         done = e.frame + 1
-        mem.add_event(e.t, e.robot, e.kind, e.detail)
+        mem.add_event(e.t, e.robot, e.kind, e.detail, data=e.data)
     mem.extend(tl.sim_times(done), tl.wall_times(done), tl.qpos(done))
     assert mem.events == tl.events
     sim_mem = copy.copy(sim)

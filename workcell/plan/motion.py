@@ -39,6 +39,7 @@ from workcell.checks import is_finite_number
 from workcell.errors import PlanningError, ProgramError
 from workcell.plan.rrt import plan_path
 from workcell.plan.scene import PlanningScene, Violation
+from workcell.sim.cycle import command_record
 
 __all__ = ["MAX_TIME", "PlannedPath", "PlanningCommands", "PlanningOptions", "describe"]
 
@@ -196,18 +197,26 @@ class PlanningCommands:
         """Run joint waypoints (row 0: where the robot is) as one command: each segment a
         joint move of the simulator's profile, all joints together."""
         times, rows = [np.empty(0)], [np.empty((0, len(waypoints[0])))]
-        start = self._start_time(name)
+        start = t0 = self._start_time(name)
+        activity: dict[str, float] = {}
         for a, b in itertools.pairwise(waypoints):
-            t, Q = self._plan(name, a, b, start=start, together=True)
-            Q = Q(0, len(t)) if callable(Q) else Q
-            if len(t):
-                times.append(t)
-                rows.append(Q)
-                start = float(t[-1])
+            m = self._plan(name, a, b, command, together=True)
+            if len(m.t):
+                times.append(start + m.t)
+                rows.append(m.rows_of())
+                start = float(times[-1][-1])
+                for k, v in m.activity.items():
+                    activity[k] = activity.get(k, 0.0) + v
         deg = ", ".join(f"{v:.6g}" for v in np.degrees(waypoints[-1]))
         how = f"{len(waypoints) - 2} via point(s)"
         if planned is not None:
             how += f", planned in {planned.seconds:.3g} s"
+        record = command_record(name, command, t0, start - t0, activity)
         self._run(
-            name, np.concatenate(times), np.concatenate(rows), command, f"to ({deg}) deg, {how}"
+            name,
+            np.concatenate(times),
+            np.concatenate(rows),
+            command,
+            f"to ({deg}) deg, {how}",
+            record,
         )

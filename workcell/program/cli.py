@@ -62,6 +62,10 @@ def _run(args: argparse.Namespace) -> int:
             _outputs(args, session.sim)
         raise
     _outputs(args, session.sim)
+    if args.cycle_time and session.sim is not None:
+        from workcell.sim.cycle import format_table
+
+        print(format_table(session.sim.cycle_time()))
     if args.summary and session.sim is not None:
         import json
 
@@ -168,6 +172,12 @@ def register(sub: Any) -> None:
     run.add_argument("--echo", action="store_true", help="print each command before its output")
     run.add_argument(
         "--summary", action="store_true", help="print the simulation's summary as JSON at the end"
+    )
+    run.add_argument(
+        "--cycle-time",
+        action="store_true",
+        help="print the cycle-time table at the end: each command's start, duration and the "
+        "limit that set it",
     )
     run.add_argument("--save", metavar="FILE.rrd", help="record the run (also up to an error)")
     from workcell.cli import add_record_fps

@@ -105,6 +105,10 @@ def format_result(command: Command, result: Any, session: Session | None = None)
         return "\n".join(lines)
     if isinstance(command, simc.SimTime):
         return f"{result:.6g} s"
+    if isinstance(command, simc.CycleTime):
+        from workcell.sim.cycle import format_table
+
+        return format_table(result)
     if isinstance(command, simc.Clearance):
         return f"{result:.6g} m"
     if isinstance(command, simc.Frames):

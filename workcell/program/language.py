@@ -56,7 +56,8 @@ UNITS_NOTE = (
     "Units: angles in degrees and lengths in metres unless you say otherwise: write a unit\n"
     "after a number (90 deg, 1.57 rad, 100 mm, 0.1 m, 0.3 rad/s, 20 ms) or glued to it\n"
     "(90deg, 100mm); a unit after a list of numbers applies to all of them. Speeds are\n"
-    "deg/s, times seconds. Keywords may be shortened to any unambiguous prefix."
+    "deg/s (a tool's m/s: 250 mm/s), accelerations deg/s^2 (a tool's m/s^2), times\n"
+    "seconds, overrides %. Keywords may be shortened to any unambiguous prefix."
 )
 
 

@@ -21,7 +21,8 @@ from workcell.errors import ProgramError
 from workcell.program import args as a
 from workcell.program.args import arg
 from workcell.program.base import Command
-from workcell.program.targets import Target, target
+from workcell.program.targets import Target, target, via_target
+from workcell.sim.profiles import PROFILES
 
 if TYPE_CHECKING:
     from workcell.program.session import Session
@@ -32,15 +33,18 @@ __all__ = [
     "CloseGripper",
     "ConcurrentlyBegin",
     "ConcurrentlyEnd",
+    "CycleTime",
     "Events",
     "Frames",
     "GripperPose",
     "Handover",
     "Held",
     "Joints",
+    "MoveCircular",
     "MoveEndEffector",
     "MoveJointsAbsolute",
     "MoveJointsRelative",
+    "MoveLinear",
     "MoveStraightLine",
     "OpenGripper",
     "PartPose",
@@ -50,7 +54,9 @@ __all__ = [
     "Play",
     "Robots",
     "SetMode",
+    "SetOverride",
     "SetPlanning",
+    "SetProfile",
     "SetSpeed",
     "SimTime",
     "Simulate",
@@ -143,42 +149,48 @@ _joints_or_pose.label = "number[] | name"  # type: ignore[attr-defined]
 @dataclass(frozen=True)
 class MoveJointsAbsolute(Command, wire="move_joints_absolute"):
     """Move a robot's joints to ``q`` (rad/m), or to a named pose of the robot ("home");
-    ``plan``: along a collision-free path."""
+    ``plan``: along a collision-free path; ``zone`` (m): blend into the next move."""
 
     robot: str = arg(a.name)
     q: tuple[float, ...] | str = arg(_joints_or_pose, doc="rad/m")
     plan: bool = arg(a.boolean, False)
+    zone: float = arg(a.number, 0.0, "m")
 
     def execute(self, session: Session) -> None:
         q = self.q if isinstance(self.q, str) else np.array(self.q)
-        _call(session, "move_joints_absolute", self.robot, q, plan=self.plan)
+        _call(session, "move_joints_absolute", self.robot, q, plan=self.plan, zone=self.zone)
 
 
 @dataclass(frozen=True)
 class MoveJointsRelative(Command, wire="move_joints_relative"):
-    """Move a robot's joints by ``dq`` (rad/m)."""
+    """Move a robot's joints by ``dq`` (rad/m); ``zone`` (m): blend into the next move."""
 
     robot: str = arg(a.name)
     dq: tuple[float, ...] = arg(a.vector, doc="rad/m")
+    zone: float = arg(a.number, 0.0, "m")
 
     def execute(self, session: Session) -> None:
-        _call(session, "move_joints_relative", self.robot, np.array(self.dq))
+        _call(session, "move_joints_relative", self.robot, np.array(self.dq), zone=self.zone)
 
 
 @dataclass(frozen=True)
 class MoveEndEffector(Command, wire="move_end_effector"):
-    """Move the tool to pose ``T`` (IK, then linear in joints); ``config`` picks the Puma
+    """Move the tool to pose ``T`` (IK, then a joint move); ``config`` picks the Puma
     solution (three letters l|r, u|d, n|f; default: the nearest); ``plan``: along a
-    collision-free path."""
+    collision-free path; ``zone`` (m): blend into the next move."""
 
     robot: str = arg(a.name)
     T: Target = arg(target)  # noqa: RUF009 - arg() returns a dataclasses.field
     config: str | None = arg(a.optional(a.name), None)
     plan: bool = arg(a.boolean, False)
+    zone: float = arg(a.number, 0.0, "m")
 
     def execute(self, session: Session) -> None:
         T = self.T.resolve(session, self.robot)
-        _call(session, "move_end_effector", self.robot, T, config=self.config, plan=self.plan)
+        _call(
+            session, "move_end_effector", self.robot, T,
+            config=self.config, plan=self.plan, zone=self.zone,
+        )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -192,6 +204,82 @@ class MoveStraightLine(Command, wire="move_straight_line"):
     def execute(self, session: Session) -> None:
         T = self.T.resolve(session, self.robot)
         _call(session, "move_straight_line", self.robot, T, step=self.step)
+
+
+@dataclass(frozen=True)
+class MoveLinear(Command, wire="move_linear"):
+    """Move the tool point along a straight line to ``T`` at ``speed`` (m/s) and
+    ``acceleration`` (m/s^2; null: 1.2), orientation interpolated, slower only where the
+    joints' limits demand; ``zone`` (m): blend into the next move."""
+
+    robot: str = arg(a.name)
+    T: Target = arg(target)  # noqa: RUF009 - arg() returns a dataclasses.field
+    speed: float = arg(a.number, doc="m/s")
+    acceleration: float | None = arg(a.optional(a.number), None, "m/s^2")
+    zone: float = arg(a.number, 0.0, "m")
+
+    def execute(self, session: Session) -> None:
+        T = self.T.resolve(session, self.robot)
+        _call(
+            session, "move_linear", self.robot, T,
+            speed=self.speed, acceleration=self.acceleration, zone=self.zone,
+        )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class MoveCircular(Command, wire="move_circular"):
+    """Move the tool point along the circle through its position, ``via`` (a point or a
+    target: its position) and the position of ``T``, to ``T``, at ``speed`` (m/s);
+    otherwise as ``move_linear``."""
+
+    robot: str = arg(a.name)
+    via: Target = arg(via_target)  # noqa: RUF009 - arg() returns a dataclasses.field
+    T: Target = arg(target)  # noqa: RUF009 - arg() returns a dataclasses.field
+    speed: float = arg(a.number, doc="m/s")
+    acceleration: float | None = arg(a.optional(a.number), None, "m/s^2")
+    zone: float = arg(a.number, 0.0, "m")
+
+    def execute(self, session: Session) -> None:
+        via = self.via.resolve(session, self.robot)
+        T = self.T.resolve(session, self.robot)
+        _call(
+            session, "move_circular", self.robot, via, T,
+            speed=self.speed, acceleration=self.acceleration, zone=self.zone,
+        )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class SetOverride(Command, wire="set_override"):
+    """Set a robot's speed override (0 < f <= 1): speeds x f, accelerations x f^2, jerks
+    x f^3, the same paths in 1/f the time."""
+
+    robot: str = arg(a.name)
+    override: float = arg(a.number, doc="fraction")
+
+    def execute(self, session: Session) -> None:
+        _call(session, "set_override", self.robot, self.override)
+
+
+@dataclass(frozen=True)
+class SetProfile(Command, wire="set_profile"):
+    """Set the joint-move profile: the thesis's linear, trapezoid, quintic (the robot's
+    speed), or jerk (each joint's speed, acceleration and jerk limits);
+    ``acceleration`` (rad/s^2): the trapezoid's."""
+
+    profile: str = arg(a.choice(*PROFILES))
+    acceleration: float | None = arg(a.optional(a.number), None, "rad/s^2")
+
+    def execute(self, session: Session) -> None:
+        _call(session, "set_profile", self.profile, self.acceleration)
+
+
+@dataclass(frozen=True)
+class CycleTime(Command, wire="cycle_time"):
+    """The cycle-time report: total_s and, per command, robot, command, t_start (s),
+    duration_s, limited_by (the limit that set its time), zone_m."""
+
+    def execute(self, session: Session) -> dict[str, Any]:
+        return _call(session, "cycle_time")
 
 
 @dataclass(frozen=True)

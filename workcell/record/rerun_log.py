@@ -19,6 +19,9 @@ Layout of the recording (entity paths; names escaped with ``rr.escape_entity_pat
 - ``/joints/{robot}``: the robot's joint values, one named series per joint (``Scalars``
   with one value per joint, in DH order): **degrees** for revolute joints, metres for
   prismatic ones (each series name says its unit, e.g. ``"j2 (deg)"``);
+- ``/joint_speeds/{robot}`` and ``/joint_accelerations/{robot}``: their finite-difference
+  speeds (deg/s, m/s) and accelerations (deg/s^2, m/s^2), shown in tabs beside the angles
+  (:mod:`workcell.record.rr_rates`);
 - ``/gripper/{robot}``: 1 while the robot holds a part (from its ``grasp`` event to its
   ``release`` event), else 0; logged at the changes, the start and the end;
 - ``/events``: every timeline event as a ``TextLog`` (``error``: ERROR, ``collision``:
@@ -65,6 +68,7 @@ from tqdm import tqdm
 
 from workcell.errors import RecordError
 from workcell.files import atomic_path, check_writable
+from workcell.record.rr_rates import Rates, acceleration_entity, speed_entity
 from workcell.record.rr_scene import (
     EVENTS,
     GRIPPERS,
@@ -153,6 +157,8 @@ class _Frames:
         self.sites = np.empty((chunk, m.nsite, 3))
         self.n = 0  # frames buffered
         self.tool_end: dict[str, Array] = {}  # last tool point sent, per robot
+        self.robots = list(sim.robots)  # in the order of layout.joints
+        self.rates = Rates()  # joint speeds and accelerations, carried across batches
 
     def add(self, rows: Array, index: NDArray[np.int64]) -> None:
         """Append timeline rows ``[sim_time, wall_time, *qpos]`` of frames ``index``,
@@ -191,11 +197,13 @@ class _Frames:
         for i, (_, ent) in enumerate(self.layout.moving):
             cols = rr.Transform3D.columns(translation=pos[i], quaternion=quat[i])
             rec.send_columns(ent, indexes=idx, columns=cols)
-        for ent, adr, revolute, _ in self.layout.joints:
+        for robot, (ent, adr, revolute, _) in zip(self.robots, self.layout.joints, strict=True):
             q = rows[:, 2 + adr]
-            q = np.where(revolute, np.degrees(q), q).reshape(-1)
-            cols = rr.Scalars.columns(scalars=q).partition(np.full(n, len(adr)))
-            rec.send_columns(ent, idx, cols)
+            v, a = self.rates.rows(robot, rows[:, 0], q)
+            for e, x in ((ent, q), (speed_entity(robot), v), (acceleration_entity(robot), a)):
+                x = np.where(revolute, np.degrees(x), x).reshape(-1)
+                cols = rr.Scalars.columns(scalars=x).partition(np.full(n, len(adr)))
+                rec.send_columns(e, idx, cols)
         for robot, site, ent in self.layout.tools:
             P = self.sites[:n, site]
             prev = np.concatenate([self.tool_end.get(robot, P[:1]), P[:-1]])
@@ -248,9 +256,9 @@ def _check_fps(fps: object) -> None:
 
 # ---------------------------------------------------------------------- public
 def default_blueprint(robots: Sequence[str], *, grippers: bool = True) -> rrb.Blueprint:
-    """The default layout: the 3D cell (tool paths drawn up to the cursor) beside one joint
-    plot per robot, the gripper states (with ``grippers``) and the event log; the time
-    panel on ``sim_time``."""
+    """The default layout: the 3D cell (tool paths drawn up to the cursor) beside, per
+    robot, tabs of its joint angles, speeds and accelerations, the gripper states (with
+    ``grippers``) and the event log; the time panel on ``sim_time``."""
     trail = rrb.VisibleTimeRanges(
         timeline="sim_time",
         start=rrb.TimeRangeBoundary.infinite(),
@@ -260,7 +268,13 @@ def default_blueprint(robots: Sequence[str], *, grippers: bool = True) -> rrb.Bl
         origin=WORLD, name="Workcell", overrides={tool_path_entity(r): trail for r in robots}
     )
     plots = [
-        rrb.TimeSeriesView(origin=f"{JOINTS}/{entity_part(r)}", name=f"{r} joints (deg)")
+        rrb.Tabs(
+            rrb.TimeSeriesView(origin=f"{JOINTS}/{entity_part(r)}", name=f"{r} joints (deg)"),
+            rrb.TimeSeriesView(origin=speed_entity(r), name=f"{r} joint speeds (deg/s)"),
+            rrb.TimeSeriesView(
+                origin=acceleration_entity(r), name=f"{r} joint accelerations (deg/s^2)"
+            ),
+        )
         for r in robots
     ]
     side = rrb.Vertical(
@@ -323,6 +337,8 @@ def log_timeline(
     d0.qpos[:] = q0
     mujoco.mj_kinematics(sim.model, d0)
     log_static(rec, sim, layout, d0)
+    for robot, (_, _, _, labels) in zip(sim.robots, layout.joints, strict=True):
+        Rates.log_static(rec, robot, labels)
     events = tl.events
     times = tl.sim_times()
     te = np.array([e.t for e in events])
@@ -343,9 +359,7 @@ def log_timeline(
             bar.update(len(rows))
         frames.flush()
     _log_events(rec, sim, layout, ev_frame, ev_wall, first, last)
-    return RecordStats(
-        int(keep.sum()), len(events), len(layout.moving), time.perf_counter() - c0
-    )
+    return RecordStats(int(keep.sum()), len(events), len(layout.moving), time.perf_counter() - c0)
 
 
 def _spawn_viewer(port: int) -> str:
@@ -422,9 +436,7 @@ def record(
             sinks += [rr.GrpcSink(_spawn_viewer(port))] if spawn else []
             sinks += [rr.GrpcSink(connect)] if connect is not None else []
             rec.set_sinks(*sinks, default_blueprint=bp)
-            stats = log_timeline(
-                rec, sim, fps=fps, chunk_frames=chunk_frames, progress=progress
-            )
+            stats = log_timeline(rec, sim, fps=fps, chunk_frames=chunk_frames, progress=progress)
             if images_fps is not None:
                 from workcell.record.rr_images import log_images
 

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from workcell.checks import is_finite_number, quote_angle, quote_length
 from workcell.errors import GraspError, ProgramError
+from workcell.sim.cycle import command_record
 from workcell.sim.grasp import PartBox, describe_failure, grasp_candidates
 from workcell.spatial import invert, pos_quat_from_pose
 
@@ -140,6 +141,7 @@ class GripperCommands:
                 "grasp",
                 f"grasp '{part}': axis {math.degrees(chosen.angle):.3g} deg, width "
                 f"{chosen.width * 1e3:.4g} mm, distance {chosen.distance * 1e3:.3g} mm",
+                data=command_record(name, "close_gripper", self.sim_time, 0.0),
             )
         return part
 
@@ -176,8 +178,11 @@ class GripperCommands:
                         hold.quat,
                     )
                 )
+            rec = command_record(name, "open_gripper", self.sim_time, 0.0)
             if hold is None:
-                self.timeline.add_event(self.sim_time, name, "open", "open_gripper: nothing held")
+                self.timeline.add_event(
+                    self.sim_time, name, "open", "open_gripper: nothing held", data=rec
+                )
             else:
                 others = self._holders[hold.part]
                 to = f", now carried by '{others[0]}'" if others else ""
@@ -189,6 +194,7 @@ class GripperCommands:
                     name,
                     "release",
                     f"release '{hold.part}': centroid ({where}) m{to}",
+                    data=rec,
                 )
                 self._after_release(name, hold.part, bool(settle))
         return None if hold is None else hold.part

@@ -429,4 +429,5 @@ class _Run:
             tracking=tracking,
             parts=parts,
             options=self.options,
+            commands=self.sim.cycle_time()["commands"],  # the plan's: the program replayed
         )
