@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import trimesh
 from robot_files import RTB, RTB_FILES, arm_mjcf, arm_urdf, random_q, write, write_meshes
+from test_library import PROGRAM  # the library robots' pick and place, in the language
 
 from workcell import Workcell, solids, spatial
 from workcell.cell import compile_cell
@@ -185,19 +186,6 @@ def test_root_confines_robot_files_of_a_loaded_cell(tmp_path):
 
 
 # ---------------------------------------------------------------- KUKA KR 16 from rtb-data
-PROGRAM = """\
-cell load {cell}
-simulate path dt 0.01
-move end_effector arm at cube offset 0 0 0.1 down config ru
-move straight arm at cube down
-close gripper arm
-move straight arm at cube offset 0 0 0.1 down
-move end_effector arm on stage offset 0 0 0.12 down config ru
-move straight arm on stage offset 0 0 0.02 down
-open gripper arm
-move straight arm on stage offset 0 0 0.12 down
-positions
-"""
 
 
 @pytest.mark.slow

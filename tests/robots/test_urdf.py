@@ -270,6 +270,15 @@ def test_a_parallel_gripper_of_the_file_is_kept(tmp_path):
     assert kept.gripper is None
 
 
+def test_fingers_sliding_along_the_approach_axis_are_no_parallel_gripper(tmp_path):
+    text = gripper_urdf().replace('<axis xyz="1 0 0"/>', '<axis xyz="0 0 1"/>')
+    text = text.replace('<axis xyz="-1 0 0"/>', '<axis xyz="0 0 -1"/>')
+    with pytest.warns(UserWarning, match="slide along the palm's z axis; it is left out"):
+        r = from_urdf(write(tmp_path, "g.urdf", text))
+    assert r.gripper is None
+    assert any(g.mesh.extents == pytest.approx([0.1, 0.03, 0.02]) for g in r.geometry)  # palm
+
+
 def test_a_file_gripper_grasps_in_the_simulator(tmp_path):
     from workcell.sim import Simulator
 

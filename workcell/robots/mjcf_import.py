@@ -116,6 +116,8 @@ def _spec(path: Path, root: Path | None) -> tuple[mujoco.MjModel, bytes]:
         raise ModelError(f"{what}: MuJoCo cannot compile it: {exc}") from None
     for i in range(model.nmesh):
         limits.check("max_facets", int(model.mesh_facenum[i]), f"{what}: mesh {i}")
+    sizes = [np.abs(a).max(initial=0.0) for a in (model.body_pos, model.geom_size, model.site_pos)]
+    limits.check("max_coordinate", float(max(sizes)), f"{what}: a body, geom or site")
     return model, data
 
 

@@ -332,11 +332,8 @@ def build_robot(
     heads = [base] + [n for n in path if links[n].joint is not None]
     last_group = dict(_rigid(heads[-1], links, children))
     hand = next((h for h in hands if h.palm in last_group), None) if keep_gripper else None
-    palm_group: set[str] = set()
-    if hand is not None:
-        palm_group = {n for n, _ in _rigid(hand.palm, links, children)}
-        if palm_group & {n for n in path if n not in last_group}:
-            hand, palm_group = None, set()  # cannot happen: the palm is fixed to the last link
+    gripper = _gripper(hand, links, children, last_group[hand.palm]) if hand else None
+    palm_group = {n for n, _ in _rigid(hand.palm, links, children)} if gripper else set()
     geometry: list[LinkGeometry] = []
     left_out: list[str] = []
     for k, head in enumerate(heads):
@@ -346,7 +343,6 @@ def build_robot(
             for c in children[n]:
                 if links[c].movable and c not in on_path and c not in fingers:
                     left_out.append(links[c].joint.name if links[c].joint else c)
-    gripper = _gripper(hand, links, children, last_group[hand.palm]) if hand else None
     if gripper is not None:
         if not given_tip and tool is None:
             tool_T = gripper.mount @ gripper.tcp
