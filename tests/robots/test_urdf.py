@@ -443,7 +443,8 @@ def test_kuka_closed_form_solutions_contain_the_generating_q():
 
 
 @needs_rtb
-@pytest.mark.parametrize("which", ["kr16", "irb140"])
+@pytest.mark.slow
+@pytest.mark.parametrize("which", sorted(RTB_FILES))
 def test_ros_industrial_files_place_in_a_cell(which):
     robot = quiet(RTB / RTB_FILES[which], concavity=None)
     assert robot.geometry

@@ -4,9 +4,9 @@
   external entity refused (no "billion laughs", no file or network reads behind the
   reader's back) and each element's line number kept for messages;
 - :func:`load_mesh`: an STL, OBJ, PLY or COLLADA (DAE) file as meshes in metres, each with
-  its own colour when the file gives one (a DAE scene keeps one mesh per part; its
-  ``<unit meter>`` is applied; its ``<up_axis>`` is not, as ROS-Industrial's files are
-  Z-up), read through :func:`workcell.files.read_bytes` (``max_file_bytes``) and refused
+  its own colour when the file gives one (a DAE scene keeps one mesh per part, parts
+  of fewer than 4 distinct vertices left out: MuJoCo takes no such mesh; its ``<unit meter>`` is
+  applied; its ``<up_axis>`` is not, as ROS-Industrial's files are Z-up), read through :func:`workcell.files.read_bytes` (``max_file_bytes``) and refused
   beyond ``max_facets`` (:mod:`workcell.limits`); a DAE with entity declarations is
   refused as the XML is;
 - :func:`primitive`: a box, cylinder, sphere, capsule or ellipsoid as a closed mesh
@@ -113,6 +113,11 @@ def _colour(visual: Any) -> Colour | None:
     return tuple(float(v) for v in rgba) if rgba.size == 4 else None  # type: ignore[return-value]
 
 
+def _solid_enough(mesh: trimesh.Trimesh) -> bool:
+    """At least 4 distinct vertices (as float32, as MuJoCo reads an STL): a mesh MuJoCo takes."""
+    return len(mesh.faces) > 0 and len(np.unique(mesh.vertices.astype(np.float32), axis=0)) >= 4
+
+
 def _check_dae(data: bytes, what: str) -> None:
     head = data[:4]
     if head.startswith((b"\xff\xfe", b"\xfe\xff")) or b"<!ENTITY" in data or b"<!DOCTYPE" in data:
@@ -151,12 +156,12 @@ def load_mesh(
         for node in loaded.graph.nodes_geometry:
             T, gname = loaded.graph[node]
             g = loaded.geometry[gname]
-            if isinstance(g, trimesh.Trimesh) and len(g.faces):
+            if isinstance(g, trimesh.Trimesh) and _solid_enough(g):
                 mesh = g.copy().apply_transform(T)
                 if unit != 1.0:
                     mesh.apply_scale(unit)
                 parts.append((mesh, _colour(g.visual)))
-    elif isinstance(loaded, trimesh.Trimesh) and len(loaded.faces):
+    elif isinstance(loaded, trimesh.Trimesh) and _solid_enough(loaded):
         parts.append((loaded, _colour(loaded.visual)))
     if not parts:
         raise ModelError(f"{what}: mesh file '{path}' holds no triangles")
