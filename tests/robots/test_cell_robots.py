@@ -337,3 +337,22 @@ def test_an_imported_robot_runs_in_physics_records_and_renders(tmp_path):
     sim.move_joints_absolute("m", q + 0.1)
     res = run_physics(sim)
     assert res.tracking["m"].tool_max < 5e-3
+
+
+@pytest.mark.filterwarnings("ignore:.*are left out")
+def test_a_cell_with_file_robots_exports_for_mujoco_and_dm_control(tmp_path):
+    from dm_control import mjcf
+
+    from workcell.cell import export_cell
+
+    write_meshes(tmp_path)
+    cell = Workcell("exported")
+    cell.add_robot("u", quiet_urdf(write(tmp_path, "arm.urdf", arm_urdf())), gripper=True)
+    cell.add_robot(
+        "m", from_mjcf(write(tmp_path, "arm.xml", arm_mjcf())), base=spatial.translation(1, 0, 0)
+    )
+    xml = export_cell(cell, tmp_path / "out")
+    physics = mjcf.Physics.from_mjcf_model(mjcf.from_path(str(xml)))
+    physics.step()
+    names = {physics.model.body(i).name for i in range(physics.model.nbody)}
+    assert {"u.gripper", "m.gripper"} <= names  # ours on the URDF arm, the MJCF arm's own
