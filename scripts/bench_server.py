@@ -32,7 +32,17 @@ EXAMPLES = {
 
 def start_server() -> tuple[subprocess.Popen, int]:
     p = subprocess.Popen(
-        [sys.executable, "-m", "workcell.program.cli", "serve", "--port", "0"],
+        # (warnings only: no log line per connection in the benchmark's output)
+        [
+            sys.executable,
+            "-m",
+            "workcell.program.cli",
+            "serve",
+            "--port",
+            "0",
+            "--log-level",
+            "warning",
+        ],
         stdout=subprocess.PIPE,
         text=True,
     )

@@ -66,3 +66,16 @@ def _coacd_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
         del os.environ[CACHE_ENV]
     else:
         os.environ[CACHE_ENV] = old
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _runtime_dir(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Servers' token files go to a temporary runtime folder (clients find them there),
+    never the user's (one per worker)."""
+    old = os.environ.get("WORKCELL_RUNTIME_DIR")
+    os.environ["WORKCELL_RUNTIME_DIR"] = str(tmp_path_factory.mktemp("runtime"))
+    yield
+    if old is None:
+        del os.environ["WORKCELL_RUNTIME_DIR"]
+    else:
+        os.environ["WORKCELL_RUNTIME_DIR"] = old

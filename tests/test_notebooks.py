@@ -27,7 +27,7 @@ from PIL import Image
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = ROOT / "notebooks"
 NAMES = ("quickstart", "modeller", "kinematics", "thesis_examples", "study")
-PICTURES = {"quickstart": 4, "modeller": 1, "kinematics": 1, "thesis_examples": 3, "study": 2}
+PICTURES = {"quickstart": 4, "modeller": 1, "kinematics": 2, "thesis_examples": 3, "study": 2}
 FLOAT = r"(-?\d+(?:\.\d*)?(?:e[-+]?\d+)?)"
 
 
@@ -142,6 +142,13 @@ def check_kinematics(out: str) -> None:
         assert ok == "True"
         assert float(err) < 1e-6
     assert "unreachable: success=False; reason: unreachable" in out
+    # the library: every robot has a closed-form family; a UR5e pose has 8 solutions
+    assert re.findall(r"^ur5e\s+6 axes, family ur", out, re.M)
+    assert re.findall(r"^kuka_kr6_r700\s+6 axes, family opw", out, re.M)
+    assert "UR5e: 8 solutions of the tool pose" in out
+    ur = re.findall(r"^ur5e ([lr][ud][nf])\s+True\s", out, re.M)
+    assert sorted(ur) == sorted(a + b + c for a in "lr" for b in "ud" for c in "nf")
+    assert _number(out, "largest |fk(q) - T| of the UR5e solutions:") < 1e-9
 
 
 def check_thesis_examples(out: str) -> None:

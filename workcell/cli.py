@@ -11,7 +11,7 @@ from pathlib import Path
 
 from workcell.examples import CELL_HELP, CELLS
 
-__all__ = ["SUBCOMMAND_MODULES", "main"]
+__all__ = ["SUBCOMMAND_MODULES", "check_outputs", "main", "run_command"]
 
 # Modules that add their own subcommands: each has ``register(sub)``, which adds its
 # parsers to the ``argparse`` subparsers ``sub`` and sets ``func`` (args -> exit code).
@@ -19,14 +19,38 @@ __all__ = ["SUBCOMMAND_MODULES", "main"]
 SUBCOMMAND_MODULES: tuple[str, ...] = (
     "workcell.record.cli_render",
     "workcell.program.cli",
+    "workcell.robots.cli",
     "workcell.study.cli",
 )
+
+
+def check_outputs(
+    *, rrd: str | None = None, png: str | None = None, folder: str | None = None
+) -> None:
+    """Refuse, before any work, output files that cannot be written: a recording ``rrd``,
+    a picture ``png``, an output ``folder`` (each None: not asked for)."""
+    from workcell.errors import ModelError, RenderError
+    from workcell.files import check_folder, check_writable
+
+    if rrd:
+        from workcell.record import check_recording_path
+
+        check_recording_path(rrd)
+    if png:
+        check_writable(png, error=RenderError)
+    if folder:
+        check_folder(folder, error=ModelError)
 
 
 def _demo_solids(args: argparse.Namespace) -> int:
     from workcell.examples.thesis_solids import build, format_report, report
     from workcell.modeller.model import Model
 
+    if args.save:
+        from workcell.errors import ModelError
+        from workcell.files import check_writable
+
+        check_writable(args.save, error=ModelError)
     t0 = time.perf_counter()
     model, exact = build()
     rows = report(model, exact)
@@ -77,6 +101,7 @@ def _demo_cell(args: argparse.Namespace) -> int:
     from workcell.examples import example as example_module
 
     example = example_module(args.example)
+    check_outputs(rrd=args.save, png=args.render, folder=args.mjcf)
     t0 = time.perf_counter()
     sim = example.run(args.mode, args.dt)
     result = sim
@@ -193,6 +218,15 @@ def main(argv: list[str] | None = None) -> int:
         prog="workcell", description="Robotic workcell simulator on MuJoCo."
     )
     parser.add_argument("--version", action="version", version=f"workcell {__version__}")
+    parser.add_argument(
+        "--limit",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="raise (or lower) a work limit of workcell.limits for this run, e.g. "
+        "--limit max_facets=2e6 (limits: max_facets, max_frames_per_command, max_frames, "
+        "max_spill_bytes, max_sim_time, max_file_bytes, max_coordinate)",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run a built-in example")
     demo.add_argument(
@@ -251,15 +285,32 @@ def main(argv: list[str] | None = None) -> int:
     for module in SUBCOMMAND_MODULES:
         importlib.import_module(module).register(sub)
     args = parser.parse_args(argv)
-    try:
-        return args.func(args)
-    except Exception as exc:  # a WorkcellError is the user's; anything else is ours
-        from workcell.errors import WorkcellError
+    return run_command(args)
 
-        if isinstance(exc, WorkcellError):
-            print(f"workcell: {type(exc).__name__}: {exc}", file=sys.stderr)
-            return 2
-        raise
+
+def run_command(args: argparse.Namespace) -> int:
+    """Run a parsed subcommand (``args.func``) under the ``--limit`` settings: a
+    WorkcellError prints one line and gives status 2; Ctrl-C prints one line and gives
+    130 (files being written are removed, never left half-written under their names);
+    anything else is a bug and raises."""
+    from workcell import limits
+    from workcell.errors import WorkcellError
+    from workcell.files import install_sigterm_cleanup
+
+    install_sigterm_cleanup()
+    try:
+        changes = dict(limits.parse_limit(t) for t in getattr(args, "limit", None) or [])
+        limits.set_limits(**changes)
+        return args.func(args)
+    except WorkcellError as exc:  # the user's; anything else is ours
+        print(f"workcell: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        # objects half-built when the interrupt came may fail in their finalizers on the
+        # way out; that is no news after Ctrl-C: keep the one line
+        sys.unraisablehook = lambda unraisable: None
+        print("workcell: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

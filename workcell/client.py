@@ -85,6 +85,10 @@ class Client:
         self._next_id = 0
         self._cell: Workcell | None = None
         self.server_hello = self._read()
+        err = self.server_hello.get("error")
+        if isinstance(err, dict):  # refused at once (busy): say why
+            self.close()
+            raise error_class(err.get("type"))(str(err.get("message")))
         if self.server_hello.get("protocol") != PROTOCOL:
             self.close()
             raise ProtocolError(f"{host}:{port} does not speak the workcell protocol")

@@ -20,13 +20,14 @@ when it could lead outside it (absolute, ``~``, ``..``, hidden names, symbolic l
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import errno
 import json
 import os
+import secrets
 import signal
 import stat
-import tempfile
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -39,6 +40,7 @@ __all__ = [
     "atomic_path",
     "atomic_write_bytes",
     "atomic_write_text",
+    "check_folder",
     "check_writable",
     "install_sigterm_cleanup",
     "load_json",
@@ -46,6 +48,7 @@ __all__ = [
     "read_bytes",
     "read_text",
     "resolve_inside",
+    "write_files",
 ]
 
 Error = type[WorkcellError]
@@ -76,12 +79,21 @@ _previous: Any = None
 _installed = False
 
 
-def _on_sigterm(signum: int, frame: Any) -> None:
+def _remove_live() -> None:
+    """Remove the temp files of writes still in progress (a signal, or the interpreter
+    leaving while daemon threads write)."""
     with _live_lock:
         tmps = list(_live)
     for tmp in tmps:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+
+
+atexit.register(_remove_live)
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    _remove_live()
     if callable(_previous):
         _previous(signum, frame)
         return
@@ -157,13 +169,28 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
-def _mkstemp(p: Path, suffix: str, path: object, error: Error) -> str:
+@contextlib.contextmanager
+def _temp_file(p: Path, suffix: str, path: object, error: Error, doing: str) -> Iterator[str]:
+    """A new empty file (mode 0600) beside ``p``, removed when the block ends (unless it
+    was renamed away). Its name is chosen and tracked before it exists, so no Ctrl-C or
+    SIGTERM between creating and removing it can leave it behind."""
+    tmp = os.path.join(p.parent, f".{p.name[:80]}.{secrets.token_hex(4)}{suffix}")
+    with _live_lock:
+        _live.add(tmp)
+    not_ours = False
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name[:80]}.", suffix=suffix, dir=p.parent)
-    except OSError as exc:
-        raise error(f"cannot write '{path}': {_reason(exc)}") from exc
-    os.close(fd)
-    return tmp
+        try:
+            os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY | os.O_CLOEXEC, 0o600))
+        except OSError as exc:
+            not_ours = isinstance(exc, FileExistsError)
+            raise error(f"cannot {doing} '{path}': {_reason(exc)}") from exc
+        yield tmp
+    finally:
+        if not not_ours:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+        with _live_lock:
+            _live.discard(tmp)
 
 
 def check_writable(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
@@ -173,7 +200,8 @@ def check_writable(path: str | os.PathLike, *, error: Error = WorkcellError) -> 
     Call it before expensive work whose result goes to ``path``.
     """
     p, _ = _target(path, error)
-    os.unlink(_mkstemp(p, ".probe", path, error))
+    with _temp_file(p, ".probe", path, error, "write"):
+        pass
     return p
 
 
@@ -197,10 +225,7 @@ def atomic_path(
     """
     p, st = _target(path, error)
     install_sigterm_cleanup()
-    tmp = _mkstemp(p, suffix, path, error)
-    with _live_lock:
-        _live.add(tmp)
-    try:
+    with _temp_file(p, suffix, path, error, "write") as tmp:
         try:
             yield tmp
             with open(tmp, "rb+") as f:
@@ -219,13 +244,6 @@ def atomic_path(
             os.replace(tmp, p)
         except OSError as exc:
             raise error(f"cannot write '{path}': {_reason(exc)}") from exc
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    finally:
-        with _live_lock:
-            _live.discard(tmp)
 
 
 def atomic_write_bytes(
@@ -243,6 +261,27 @@ def atomic_write_text(
     atomic_write_bytes(path, text.encode("utf-8"), error=error, mode=mode)
 
 
+def check_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
+    """Check that folder ``path`` exists or can be created, and that files can be written
+    in it (the nearest existing folder on the way gets a real temp file, removed at
+    once); ``error`` naming the path if not. Call it before expensive work."""
+    p = Path(os.path.realpath(os.fspath(path)))
+    here = p
+    while True:
+        try:
+            st = os.stat(here)
+            break
+        except FileNotFoundError:
+            here = here.parent  # the root folder exists: this ends
+        except OSError as exc:
+            raise error(f"cannot write into folder '{path}': {_reason(exc)}") from exc
+    if not stat.S_ISDIR(st.st_mode):
+        raise error(f"cannot write into folder '{path}': '{here}' is not a folder")
+    with _temp_file(here / "workcell", ".probe", path, error, "write into folder"):
+        pass
+    return p
+
+
 def make_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
     """Create folder ``path`` and its parents when missing; ``error`` naming the path if not."""
     p = Path(path)
@@ -251,6 +290,17 @@ def make_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Pat
     except OSError as exc:
         raise error(f"cannot create folder '{path}': {_reason(exc)}") from exc
     return p
+
+
+def write_files(
+    folder: str | os.PathLike, files: dict[str, bytes], *, error: Error = WorkcellError
+) -> None:
+    """Write ``files`` (relative name -> bytes) into ``folder``, each atomically, creating
+    the folders on the way; ``error`` naming the path on any file-system failure."""
+    out = Path(folder)
+    for name, data in files.items():
+        make_folder((out / name).parent, error=error)
+        atomic_write_bytes(out / name, data, error=error)
 
 
 # ------------------------------------------------------------------ reading

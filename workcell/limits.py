@@ -13,8 +13,8 @@ limit                       default        what it bounds
 ``max_frames_per_command``  2,000,000      frames one command adds to the timeline
 ``max_frames``              20,000,000     frames of one simulation
 ``max_spill_bytes``         4 GiB          the timeline's spill file on disk
-``max_sim_time``            1e7 s          the simulated clock (~116 days; recordings store
-                                           ns in int64, which ends at 9.2e9 s)
+``max_sim_time``            1e7 s          the simulated clock (~116 days; at most 9.2e9 s:
+                                           recordings store int64 nanoseconds)
 ``max_file_bytes``          256 MiB        a model, cell or script file read
 ``max_coordinate``          1e6 m          any coordinate, length or translation given, and
                                            any entry of a transform's 3x3 part
@@ -44,7 +44,10 @@ from dataclasses import dataclass, field
 
 from workcell.errors import LimitError
 
-__all__ = ["DEFAULTS", "Limits", "check", "current", "parse_limit", "set_limits", "using"]
+__all__ = ["DEFAULTS", "MAX_SIM_TIME", "Limits", "check", "current", "parse_limit", "set_limits", "using"]
+
+
+MAX_SIM_TIME = 9.2e9  # s: int64 nanoseconds (rerun's time type) end at 9.22e9 s
 
 
 def _limit(default: float, unit: str, doc: str) -> float:
@@ -72,6 +75,11 @@ class Limits:
             if isinstance(f.default, int) and v != int(v):
                 raise LimitError(f"limit {f.name} must be a whole number, got {v!r}")
             object.__setattr__(self, f.name, type(f.default)(v))
+        if self.max_sim_time > MAX_SIM_TIME:
+            raise LimitError(
+                f"limit max_sim_time must be at most {MAX_SIM_TIME:.3g} s (recordings keep "
+                f"times as int64 nanoseconds), got {self.max_sim_time!r}"
+            )
 
 
 DEFAULTS = Limits()

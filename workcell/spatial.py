@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from workcell import limits
 from workcell.errors import GeometryError
 
 __all__ = [
@@ -255,15 +256,24 @@ def det3(T: ArrayLike) -> Array:
 def as_transforms(transforms: ArrayLike, *, rigid: bool = False, what: str = "transform") -> Array:
     """Validate one 4x4 (or 3x4) matrix or an (N, 4, 4) stack; return a float64 copy.
 
-    Checks: finite, last row ``(0, 0, 0, 1)`` within 1e-12, non-singular upper 3x3
-    (``|det| > 1e-12``); with ``rigid=True`` also orthonormal with ``det = +1`` within 1e-9.
-    Raises GeometryError starting with ``what`` (and, for a stack, the index of the first
-    bad matrix) and giving the reason. The returned last rows are exactly (0, 0, 0, 1).
+    Checks: numbers (not strings or bools), finite, every entry of the top three rows at
+    most ``max_coordinate`` (:mod:`workcell.limits`, 1e6: LimitError), last row
+    ``(0, 0, 0, 1)`` within 1e-12, non-singular upper 3x3 (``|det| > 1e-12``); with
+    ``rigid=True`` also orthonormal with ``det = +1`` within 1e-9. Raises GeometryError
+    starting with ``what`` (and, for a stack, the index of the first bad matrix) and
+    giving the reason. The returned last rows are exactly (0, 0, 0, 1).
     """
     try:
+        numeric = (
+            transforms.dtype.kind in "iuf"
+            if isinstance(transforms, np.ndarray)
+            else np.asarray(transforms).dtype.kind in "iuf"
+        )
         A = np.array(transforms, dtype=np.float64)
     except (TypeError, ValueError, OverflowError) as exc:
         raise GeometryError(f"{what} is not a numeric 4x4 matrix") from exc
+    if not numeric:
+        raise GeometryError(f"{what} is not a numeric 4x4 matrix (numbers, not strings or bools)")
     single = A.ndim == 2
     if single and A.shape == (3, 4):
         A = np.vstack([A, _LAST_ROW])
@@ -283,6 +293,8 @@ def as_transforms(transforms: ArrayLike, *, rigid: bool = False, what: str = "tr
     finite = np.isfinite(A).all(axis=(1, 2))
     if not finite.all():
         fail(~finite, "is not affine: it has non-finite entries (NaN or inf)")
+    if len(A):
+        limits.check("max_coordinate", float(np.abs(A[:, :3]).max()), f"{what}: an entry")
     off = np.abs(A[:, 3] - _LAST_ROW).max(axis=1) > 1e-12
     if off.any():
         fail(off, lambda i: f"is not affine: its last row must be (0, 0, 0, 1), got {A[i, 3]}")
@@ -306,6 +318,9 @@ def _valid_single(rows: list[list[float]], rigid: bool) -> bool:
     (a, b, c, _), (d, e, f, _), (g, h, i, _), last = rows
     if not math.isfinite(sum(rows[0]) + sum(rows[1]) + sum(rows[2]) + sum(rows[3])):
         return False  # an entry is not finite (or so large that the sum overflows)
+    bound = limits.current().max_coordinate
+    if any(abs(v) > bound for row in rows[:3] for v in row):
+        return False
     if max(abs(last[0]), abs(last[1]), abs(last[2]), abs(last[3] - 1.0)) > 1e-12:
         return False
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import importlib.util
 import math
-import os
 
 import numpy as np
 import pytest
@@ -55,14 +54,3 @@ def session(tmp_path) -> Session:
     """An empty session whose relative files go to a temporary folder."""
     return Session(base_dir=tmp_path)
 
-
-@pytest.fixture(autouse=True, scope="session")
-def _runtime_dir(tmp_path_factory):
-    """Servers' token files go to a temporary runtime folder (clients find them there)."""
-    old = os.environ.get("WORKCELL_RUNTIME_DIR")
-    os.environ["WORKCELL_RUNTIME_DIR"] = str(tmp_path_factory.mktemp("runtime"))
-    yield
-    if old is None:
-        os.environ.pop("WORKCELL_RUNTIME_DIR", None)
-    else:
-        os.environ["WORKCELL_RUNTIME_DIR"] = old

@@ -29,6 +29,7 @@ from workcell import spatial
 from workcell.errors import GeometryError, KinematicsError
 from workcell.robots import Joint, Robot, ik_closed, puma260, puma560
 from workcell.robots.ik_closed import CONFIGS, config_of, ik_all, ik_batch, ik_report
+from workcell.robots.ik_wrap import rows_of
 
 P560 = puma560(geometry=False)
 P260 = puma260(geometry=False)
@@ -602,7 +603,9 @@ def test_joint_rows_equal_wrap_batch_to_the_bit(robot, data):
                 data.draw(st.lists(st.sampled_from([-1, 1]), min_size=6, max_size=6))
             )
     near_t = (None,) * 6 if near is None else tuple((near * (1.0 / TWO_PI)).tolist())
-    Qs, rows, flags = ik_closed._rows(S, [(0, tuple(theta.tolist()), False)], near_t)
+    Qs, rows, flags = rows_of(
+        S.signs, S.offs, S.joints, [(0, tuple(theta.tolist()), False)], near_t
+    )
     W, ok = robot.wrap_batch(Q, near)
     assert Qs[0] == Q.tolist()
     assert rows[0] == (W if ok.all() else Q).tolist()

@@ -341,3 +341,29 @@ def test_exported_folder_loads_from_any_directory(tmp_path, name):
     M = robot_spec(robot, prefix=PREFIX).compile()
     np.testing.assert_allclose(res["mujoco"][2], M.body_mass, rtol=1e-12)
     assert res["stepped"]
+
+
+def test_mesh_link_geometry_for_robots_described_by_files():
+    """LinkGeometry can carry a mesh (as a URDF/MJCF import gives them) instead of a block:
+    its exact mass at the density, its collision pieces, and the tool site on FK."""
+    box = trimesh.creation.box(extents=(0.3, 0.05, 0.04))
+    halves = (
+        trimesh.creation.box(extents=(0.15, 0.05, 0.04)).apply_translation((-0.075, 0, 0)),
+        trimesh.creation.box(extents=(0.15, 0.05, 0.04)).apply_translation((0.075, 0, 0)),
+    )
+    geo = (
+        LinkGeometry(1, None, spatial.translation(-0.15, 0, 0), mesh=box, collision=halves),
+        LinkGeometry(2, None, spatial.translation(-0.1, 0, 0) @ spatial.scaling(0.5), mesh=box),
+    )
+    robot = Robot("meshy", (Joint.from_dh("a", a=0.3), Joint.from_dh("b", a=0.2)), geometry=geo)
+    M = robot_spec(robot, density=1000.0).compile()
+    assert M.body_mass[body_id(M, "link1")] == pytest.approx(1000 * 0.3 * 0.05 * 0.04, rel=1e-6)
+    assert M.body_mass[body_id(M, "link2")] == pytest.approx(1000 * 0.3 * 0.05 * 0.04 / 8, rel=1e-6)
+    col_bodies = M.geom_bodyid[M.geom_group == 3].tolist()
+    assert col_bodies.count(body_id(M, "link1")) == 2  # the two given pieces
+    assert col_bodies.count(body_id(M, "link2")) == 1  # the hull
+    for q in np.random.default_rng(4).uniform(robot.lower, robot.upper, (5, 2)):
+        D = arm_qpos(M, robot, "", q)
+        np.testing.assert_allclose(site_pose(M, D, "tool"), robot.fk(q), atol=1e-12)
+    with pytest.raises(Exception, match="exactly one"):
+        LinkGeometry(1, "block", np.eye(4), mesh=box)

@@ -51,8 +51,8 @@ import numpy as np
 from workcell.cell.workcell import Workcell
 from workcell.checks import is_finite_number
 from workcell.decompose import DEFAULT_CONCAVITY
-from workcell.errors import GeometryError
-from workcell.files import atomic_write_bytes, atomic_write_text
+from workcell.errors import GeometryError, ModelError
+from workcell.files import check_folder, write_files
 from workcell.meshgeoms import (
     CONTACT_SOLIMP,
     CONTACT_SOLREF,
@@ -146,6 +146,8 @@ def _add_part_geoms(
         visuals = [(f"{name}.mesh{k}", f"{name}.visual{k}", p.mesh) for k, p in enumerate(parts)]
     else:
         visuals = [(f"{name}.mesh", f"{name}.visual", model.world_mesh(entity))]
+    if any(len(mesh.faces) == 0 for _, _, mesh in visuals):  # e.g. an operand moved away
+        raise GeometryError(f"part '{name}': {entity[0]} '{entity[1]}' is empty (no faces)")
     meshes = [reg.add(vis, mesh) for vis, _, mesh in visuals]
     col = collision_pieces(model, entity, concavity)
     cols = meshes if col.convex else collision_meshes(reg, name, col.pieces, False, meshes[0])
@@ -293,15 +295,13 @@ def export_cell(
     compiled (with the physics ``timestep``, s, and the decomposition bound ``concavity``)
     before anything is written; every file is written atomically.
     """
+    check_folder(out_dir, error=ModelError)  # before the compiling
     compiled = compile_cell(cell, timestep=timestep, concavity=concavity)
     try:
         xml = spec_to_xml(compiled.spec)
     except ValueError as exc:
         raise GeometryError(f"cell '{cell.name}' cannot be written as MJCF: {exc}") from exc
-    out = Path(out_dir)
-    (out / MESHDIR).mkdir(parents=True, exist_ok=True)
-    for file, data in compiled.assets.items():
-        atomic_write_bytes(out / MESHDIR / file, data)
-    path = out / (file_name or f"{cell.name}.xml")
-    atomic_write_text(path, xml)
-    return path
+    name = file_name or f"{cell.name}.xml"
+    files = {f"{MESHDIR}/{file}": data for file, data in compiled.assets.items()}
+    write_files(out_dir, {**files, name: xml.encode("utf-8")}, error=ModelError)
+    return Path(out_dir) / name

@@ -6,7 +6,8 @@ part geometry and, by name:
 - static parts: a block or object of the model at a world pose (4x4 rigid, m), coloured;
 - movable parts: the same plus a density (kg/m^3); mass, bounding box and centroid frame
   (the thesis's grasp data) are computed from the geometry, never stored;
-- robots: a :class:`~workcell.robots.Robot` (built-in Puma 260/560, optionally with a
+- robots: a :class:`~workcell.robots.Robot` (a library robot by name,
+  :func:`workcell.robots.library`, or any Robot; optionally with a
   :func:`~workcell.robots.parallel_gripper`) at a world base pose (composed with the
   robot's own ``base``) with initial joint values;
 - cameras: a position, a look-at target and a vertical field of view (deg).
@@ -21,6 +22,7 @@ Saved as versioned JSON (``format: "workcell-cell", version: 1``); the model thr
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import re
@@ -32,11 +34,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell import limits
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, ModelError, WorkcellError
 from workcell.files import atomic_write_text, load_json
 from workcell.modeller.model import MAX_NAME_LENGTH, Model, check_colour
-from workcell.robots import attach_gripper, parallel_gripper, puma260, puma560
+from workcell.robots import attach_gripper, get, library, parallel_gripper
 from workcell.robots.robot import Robot
 from workcell.spatial import as_transform, translation
 
@@ -58,8 +61,9 @@ FORMAT = "workcell-cell"
 VERSION = 1
 DEFAULT_COLOUR = (0.6, 0.6, 0.62, 1.0)
 BUILTIN_ROBOTS: Mapping[str, Callable[[], Robot]] = MappingProxyType(
-    {"puma260": puma260, "puma560": puma560}
+    {name: functools.partial(get, name) for name in library()}
 )
+"""The library robots by name (:func:`workcell.robots.get`), as the cell builds them."""
 GRIPPER_PARAMETERS = (
     "name",
     "max_opening",
@@ -113,8 +117,8 @@ class RobotPlacement:
 
     ``robot`` as built (gripper attached if any); ``base`` (4x4) the world pose of the
     robot's base frame, so the world pose of its tool is ``base @ robot.fk(q)``; ``q``
-    the initial joint values (rad/m). ``builtin`` names the built-in model it came from
-    ("puma260"/"puma560", None for a custom robot) and ``gripper_parameters`` the
+    the initial joint values (rad/m). ``builtin`` names the library robot it came from
+    ("ur5e", "puma260", ...; None for a custom robot) and ``gripper_parameters`` the
     :func:`parallel_gripper` arguments (None: no gripper, or a custom one).
     """
 
@@ -169,20 +173,19 @@ def look_at(position: ArrayLike, target: ArrayLike) -> Array:
 
 
 def _vec3(value: object, what: str) -> Array:
-    try:
-        v = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise GeometryError(f"{what} must be 3 finite numbers (m), got {value!r}") from exc
-    if v.shape != (3,) or not np.all(np.isfinite(v)):
+    values = list(value) if isinstance(value, (list, tuple, np.ndarray)) else []
+    if len(values) != 3 or not all(is_finite_number(x) for x in values):
         raise GeometryError(f"{what} must be 3 finite numbers (m), got {value!r}")
+    v = np.array(values, dtype=np.float64)
+    limits.check("max_coordinate", float(np.abs(v).max()), what)
     return v
 
 
 def build_robot(builtin: str, gripper: Mapping[str, Any] | None) -> Robot:
-    """The built-in robot ``builtin`` with a parallel gripper of ``gripper`` parameters (or none)."""
+    """The library robot ``builtin`` with a parallel gripper of ``gripper`` parameters (or none)."""
     if builtin not in BUILTIN_ROBOTS:
         raise ModelError(f"unknown built-in robot {builtin!r}; known: {', '.join(BUILTIN_ROBOTS)}")
-    robot = BUILTIN_ROBOTS[builtin]()
+    robot = get(builtin)
     if gripper is None:
         return robot
     if not isinstance(gripper, Mapping):
@@ -302,6 +305,8 @@ class Workcell:
         what = f"static part '{name}'"
         ent = self._entity(entity, what)
         T = as_transform(np.eye(4) if pose is None else pose, rigid=True, name=f"{what} pose")
+        if len(self.model.world_mesh(ent).faces) == 0:
+            raise GeometryError(f"{what}: entity {ent[0]} '{ent[1]}' is empty (no faces)")
         part = StaticPart(name, ent, T, self._colour(colour, ent, what))
         self._static[name] = part
         return part
@@ -343,7 +348,8 @@ class Workcell:
         base: ArrayLike | None = None,
         q: ArrayLike | None = None,
     ) -> RobotPlacement:
-        """Add a robot: a built-in name ("puma260", "puma560") or a :class:`Robot`.
+        """Add a robot: a library name (``workcell.robots.library()``: "ur5e", "puma260",
+        "kuka_kr6_r700", ...) or a :class:`Robot`.
 
         ``gripper``: True for the default :func:`parallel_gripper`, a mapping of its
         parameters, or None for none (a ``Robot`` may already carry one). ``base`` (4x4

@@ -1,8 +1,10 @@
 """Boolean (CSG) blocks: union, difference and intersection through manifold3d.
 
 A boolean block keeps its operands as relations to other blocks (so they cannot be
-removed while it uses them) and is evaluated lazily, in double precision (manifold3d's
-``Mesh64``), when its mesh is first asked for.
+removed while it uses them) and is evaluated in double precision (manifold3d's
+``Mesh64``): :func:`union`, :func:`difference` and :func:`intersection` evaluate it when
+they create it (a failing or empty result is refused, the model left as it was); the
+result is cached and evaluated again when asked for after an operand changed.
 """
 
 from __future__ import annotations
@@ -65,7 +67,17 @@ def _make(
     transforms: Sequence[ArrayLike | None] | None,
     colour: ArrayLike | None,
 ) -> str:
-    return model.create_boolean(name, op, list(operands), transforms, colour=colour)
+    model.create_boolean(name, op, list(operands), transforms, colour=colour)
+    try:  # evaluated now: a failing or empty result is refused, the model left as it was
+        if len(model.world_mesh(("block", name)).faces) == 0:
+            raise GeometryError(
+                f"boolean block '{name}' is empty: the {op} of {', '.join(map(str, operands))} "
+                "leaves no solid"
+            )
+    except BaseException:
+        model.remove(("block", name))
+        raise
+    return name
 
 
 def union(

@@ -342,6 +342,8 @@ class Model:
                 raise ModelError(f"creating surface '{name}' needs a Surface, got {surface!r}")
         elif surface is not None:
             raise ModelError(f"only surfaces take a Surface; '{name}' is a {level}")
+        if not isinstance(movable, (bool, np.bool_)):
+            raise ModelError(f"movable must be True or False, got {movable!r}")
         if movable and level == "surface":
             raise ModelError("the movable flag applies to blocks, objects and scenes, not surfaces")
         c = None if colour is None else check_colour(colour)
@@ -362,7 +364,8 @@ class Model:
         """Create a boolean (CSG) block ``op`` of operand blocks, each placed by a transform.
 
         ``difference`` subtracts the second and later operands from the first. The result
-        is evaluated lazily (manifold3d) when its mesh is asked for.
+        is evaluated lazily (manifold3d) when its mesh is asked for (the solids'
+        ``union``, ``difference`` and ``intersection`` evaluate it at once).
         """
         if op not in BOOLEAN_OPS:
             raise ModelError(
@@ -653,6 +656,8 @@ class Model:
         e = self._get(ref)
         if e.level == "surface":
             raise ModelError("the movable flag applies to blocks, objects and scenes, not surfaces")
+        if not isinstance(movable, (bool, np.bool_)):
+            raise ModelError(f"movable must be True or False, got {movable!r}")
         e.movable = bool(movable)
         self._touch(e)
 
@@ -698,8 +703,8 @@ class Model:
             self.create("surface", new_name, surf, colour=e.colour)
             return new_name
         Ts = e.rels.T.copy() if T is None else T @ e.rels.T
-        if e.level == "scene":
-            as_transforms(Ts, rigid=True, what=f"copy of {e.label}")
+        if T is not None:  # the products: finite, in range, and rigid in a scene
+            as_transforms(Ts, rigid=e.level == "scene", what=f"copy of {e.label}")
         c = self._levels[e.level]
         new = _Entity(e.level, new_name)
         new.colour, new.movable, new.boolean, new.serial = e.colour, e.movable, e.boolean, e.serial

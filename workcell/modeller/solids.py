@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from workcell import spatial
+from workcell import limits, spatial
+from workcell.checks import is_finite_number
 from workcell.errors import GeometryError
 from workcell.modeller.model import Model
 from workcell.modeller.patches import (
@@ -35,10 +36,11 @@ _FLIP = spatial.scaling(1.0, 1.0, -1.0)  # turns a placed surface over (front si
 
 
 def _positive(name: str, **values: float) -> None:
+    """Each value a number > 0 (not a bool, not a string), at most ``max_coordinate`` (m)."""
     for key, v in values.items():
-        number = isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, bool)
-        if not (number and np.isfinite(v) and v > 0):
+        if not (is_finite_number(v) and v > 0):
             raise GeometryError(f"solid '{name}': {key} must be a positive number, got {v!r}")
+        limits.check("max_coordinate", float(v), f"solid '{name}': {key}")
 
 
 def _count(name: str, key: str, v: object, minimum: int) -> int:
@@ -48,13 +50,10 @@ def _count(name: str, key: str, v: object, minimum: int) -> int:
 
 
 def _triple(name: str, key: str, v: object) -> NDArray[np.float64]:
-    try:
-        a = np.asarray(v, dtype=np.float64).ravel()
-    except (TypeError, ValueError):
-        a = np.zeros(0)
-    if a.shape != (3,):
+    values = list(v) if isinstance(v, (list, tuple, np.ndarray)) else []
+    if len(values) != 3 or not all(is_finite_number(x) for x in values):
         raise GeometryError(f"solid '{name}': {key} must be three numbers, got {v!r}")
-    return a
+    return np.array(values, dtype=np.float64)
 
 
 def cube_face_transforms() -> NDArray[np.float64]:
@@ -115,6 +114,7 @@ def cylinder(
     """
     _positive(name, radius=radius, height=height)
     n = _count(name, "n", n, 3)
+    limits.check("max_facets", 4 * n - 4, f"cylinder '{name}' (n = {n})")
     t = 2 * np.pi * np.arange(n + 1) / n
     P = np.column_stack([-radius * np.sin(t), radius * np.cos(t), np.zeros(n + 1)])
     sides = parallelogram_transforms(P[:-1], P[1:] - P[:-1], np.tile([0.0, 0.0, height], (n, 1)))
@@ -192,6 +192,7 @@ def ellipsoid(
     _positive(name, a=float(r[0]), b=float(r[1]), c=float(r[2]))
     m = _count(name, "m", m, 3)
     n = _count(name, "n", n, 1)
+    limits.check("max_facets", 4 * m * n, f"sphere or ellipsoid '{name}' (m = {m}, n = {n})")
     surfaces, relations = _sphere_parts(name, m, n, r)
     return build_block(model, name, surfaces, relations, colour=colour)
 

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from workcell.errors import GeometryError, ModelError
+from workcell.errors import ModelError, WorkcellError
 from workcell.files import atomic_write_text, load_json
 from workcell.modeller.model import BOOLEAN_OPS, CHILD, LEVELS, Model, check_name
 from workcell.modeller.surface import Surface
@@ -123,7 +123,7 @@ def model_from_dict(data: Any) -> Model:
                         if level != "block" or op not in BOOLEAN_OPS:
                             raise ModelError(f"invalid boolean {op!r}")
                         m._levels[level][name].boolean = op
-            except (ModelError, GeometryError) as exc:
+            except WorkcellError as exc:
                 raise ModelError(f"{where}: {exc}") from exc
     # pass 2: relations
     for level in LEVELS[1:]:
@@ -145,7 +145,7 @@ def model_from_dict(data: Any) -> Model:
                 try:
                     T = np.array(Ts, dtype=np.float64)
                     m.attach_many((level, d["name"]), targets, T, names=names)
-                except (ModelError, GeometryError, ValueError, TypeError, OverflowError) as exc:
+                except (WorkcellError, ValueError, TypeError, OverflowError) as exc:
                     raise ModelError(f"{where}: {exc}") from exc
             if e.boolean and e.rels.n < 2:
                 raise ModelError(f"{where}: a boolean block needs at least 2 operands")

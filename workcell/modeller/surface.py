@@ -19,6 +19,8 @@ import shapely
 from numpy.typing import ArrayLike, NDArray
 from shapely.geometry import LinearRing, Polygon
 
+from workcell import limits
+from workcell.checks import is_finite_number
 from workcell.errors import GeometryError
 
 __all__ = ["Surface"]
@@ -40,15 +42,23 @@ def _signed_area(p: NDArray[np.float64]) -> float:
 def _clean_contour(points: ArrayLike, label: str, surface: str) -> NDArray[np.float64]:
     """Return an (N, 2) float array with the closing point and repeated points removed."""
     try:
+        kind = np.asarray(points).dtype.kind
         p = np.array(points, dtype=np.float64)
     except (TypeError, ValueError, OverflowError) as exc:
         raise GeometryError(f"surface '{surface}': {label} is not a list of (x, y) points") from exc
+    if kind not in "iuf":
+        raise GeometryError(
+            f"surface '{surface}': {label} must hold numbers (not strings or bools)"
+        )
     if p.ndim != 2 or p.shape[1] != 2:
         raise GeometryError(
             f"surface '{surface}': {label} must be a list of (x, y) points, got shape {p.shape}"
         )
     if not np.all(np.isfinite(p)):
         raise GeometryError(f"surface '{surface}': {label} has a non-finite coordinate")
+    if len(p):
+        limits.check("max_coordinate", float(np.abs(p).max()), f"surface '{surface}': {label}")
+    limits.check("max_facets", len(p), f"surface '{surface}': {label} (points)")
     keep = np.ones(len(p), dtype=bool)
     if len(p) > 1:
         keep[1:] = np.any(np.abs(np.diff(p, axis=0)) > _EPS, axis=1)
@@ -142,6 +152,10 @@ class Surface:
         cls, width: float, height: float, *, center: bool = False, name: str = "rectangle"
     ) -> Surface:
         """Rectangle ``width`` x ``height`` (m) with a corner at the origin, or centred."""
+        if not (is_finite_number(width) and is_finite_number(height) and width > 0 and height > 0):
+            raise GeometryError(
+                f"surface '{name}': width and height must be numbers > 0, got {width!r}, {height!r}"
+            )
         x0, y0 = (-width / 2, -height / 2) if center else (0.0, 0.0)
         pts = [(x0, y0), (x0 + width, y0), (x0 + width, y0 + height), (x0, y0 + height)]
         return cls(pts, name=name)
@@ -324,10 +338,13 @@ class Surface:
 def _ngon(
     n: int, radius: float, center: tuple[float, float], phase: float, name: str
 ) -> NDArray[np.float64]:
-    if int(n) != n or n < 3:
-        raise GeometryError(f"surface '{name}': a polygon needs n >= 3 sides, got {n}")
-    if not radius > 0:
-        raise GeometryError(f"surface '{name}': radius must be > 0, got {radius}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
+        raise GeometryError(f"surface '{name}': a polygon needs an integer n >= 3 sides, got {n!r}")
+    if not (is_finite_number(radius) and radius > 0):
+        raise GeometryError(f"surface '{name}': radius must be a number > 0, got {radius!r}")
+    if not (is_finite_number(phase) and len(center) == 2 and all(map(is_finite_number, center))):
+        raise GeometryError(f"surface '{name}': center must be two numbers and phase a number")
+    limits.check("max_facets", int(n), f"surface '{name}' (n = {n})")
     t = phase + 2 * np.pi * np.arange(int(n)) / int(n)
     return np.column_stack([center[0] + radius * np.cos(t), center[1] + radius * np.sin(t)])
 

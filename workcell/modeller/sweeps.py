@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from workcell import spatial
+from workcell import limits, spatial
+from workcell.checks import is_finite_number
 from workcell.errors import GeometryError
 from workcell.modeller.model import Model
 from workcell.modeller.patches import (
@@ -75,10 +76,12 @@ def extrude(
         raise GeometryError(
             f"sweep '{name}': direction must be a finite 3-vector, got {direction!r}"
         )
+    limits.check("max_coordinate", float(np.abs(d).max()), f"sweep '{name}': the direction")
     if abs(d[2]) <= 1e-12 * max(1.0, float(np.linalg.norm(d))):
         raise GeometryError(
             f"sweep '{name}': the direction {d.tolist()} lies in the surface's plane (z = 0)"
         )
+    limits.check("max_facets", 4 * s.n_edges, f"sweep '{name}'")
     a2, b2 = s.edges()
     a = np.column_stack([a2, np.zeros(len(a2))])
     e1 = np.column_stack([b2 - a2, np.zeros(len(a2))])
@@ -113,12 +116,13 @@ def revolve(
     (rad, in (0, 2 pi]) in ``n`` equal steps; a partial sweep is closed by two profile caps.
     """
     s, ref = _profile(model, name, profile)
-    if not (np.isfinite(angle) and 0 < angle <= 2 * np.pi + 1e-12):
+    if not (is_finite_number(angle) and 0 < angle <= 2 * np.pi + 1e-12):
         raise GeometryError(f"sweep '{name}': angle must be in (0, 2 pi] rad, got {angle!r}")
     full = angle >= 2 * np.pi - 1e-12
     n_min = 3 if full else 1
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < n_min:
         raise GeometryError(f"sweep '{name}': n must be an integer >= {n_min}, got {n!r}")
+    limits.check("max_facets", 2 * s.n_edges * int(n) + 2 * s.n_edges, f"sweep '{name}' (n = {n})")
     if min(c[:, 0].min() for c in s.contours) < -1e-12:
         raise GeometryError(f"sweep '{name}': the profile crosses the axis (r < 0); keep r >= 0")
     step = 2 * np.pi / n if full else angle / n
@@ -203,6 +207,8 @@ def sweep(
     P = np.asarray(path, dtype=np.float64)
     if P.ndim != 2 or P.shape[1] != 3 or len(P) < 2 or not np.all(np.isfinite(P)):
         raise GeometryError(f"sweep '{name}': path must be (K >= 2, 3) finite points")
+    limits.check("max_coordinate", float(np.abs(P).max()), f"sweep '{name}': the path")
+    limits.check("max_facets", 2 * (len(P) - 1) * s.n_edges + 2 * s.n_edges, f"sweep '{name}'")
     if directions is None:
         D = np.gradient(P, axis=0)
     else:

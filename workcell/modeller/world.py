@@ -19,6 +19,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from workcell import limits
 from workcell.errors import GeometryError
 from workcell.modeller.meshprops import MassProperties, mass_properties, orient_consistently
 from workcell.spatial import det3
@@ -26,7 +27,7 @@ from workcell.spatial import det3
 if TYPE_CHECKING:
     from workcell.modeller.model import _Entity
 
-__all__ = ["WorldPart", "merge_vertices", "place_mesh"]
+__all__ = ["WorldPart", "facet_estimate", "merge_vertices", "place_mesh"]
 
 DEFAULT_COLOUR = (0.7, 0.7, 0.72, 1.0)
 _MERGE_REL = 1e-9  # vertices closer than this fraction of the mesh size are one vertex
@@ -268,9 +269,36 @@ def _placed_blocks(e: _Entity) -> list[tuple[str, _Entity, _Entity | None, NDArr
     raise GeometryError(f"{e.label} has no placed blocks")
 
 
+def facet_estimate(e: _Entity) -> int:
+    """Triangles of the entity's world mesh, counted from its relations without meshing
+    (a surface of n contour points and h holes: n - 2 + 2 h; a boolean: its operands').
+    Cached."""
+    hit = e.cache.get("facets")
+    if hit is None:
+        if e.level == "surface":
+            hit = e.surface.n_edges - 2 + 2 * len(e.surface.holes)
+        else:
+            counts: dict[int, int] = {}
+            hit = 0
+            for t in e.rels.targets:
+                k = counts.get(id(t))
+                if k is None:
+                    k = counts[id(t)] = facet_estimate(t)
+                hit += k
+        e.cache["facets"] = hit
+    return hit
+
+
+def _check_facets(e: _Entity) -> None:
+    """Refuse (LimitError) to mesh an entity of more than ``max_facets`` triangles."""
+    if "arrays" not in e.cache and "mesh" not in e.cache:
+        limits.check("max_facets", facet_estimate(e), f"the mesh of {e.label}")
+
+
 def _arrays(e: _Entity) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     if e.level == "surface":
         return _surface_arrays(e)
+    _check_facets(e)
     if e.level == "block":
         return _block_arrays(e)
     placed = _placed_blocks(e)
@@ -300,6 +328,7 @@ def entity_parts(e: _Entity) -> list[WorldPart]:
     """One WorldPart per placed block of ``e``, carrying its source names and colour. Cached."""
     hit = e.cache.get("parts")
     if hit is None:
+        _check_facets(e)
         hit = []
         for path, b, o, T in _placed_blocks(e):
             Vw, Fw = place_mesh(*_block_arrays(b), T)

@@ -18,6 +18,7 @@ from workcell.examples import CELLS
 from workcell.program import args as a
 from workcell.program.args import arg
 from workcell.program.base import Command
+from workcell.robots.library import library
 
 if TYPE_CHECKING:
     from workcell.cell.workcell import Workcell
@@ -121,11 +122,12 @@ class ExampleCell(Command, wire="example_cell"):
 
 @dataclass(frozen=True)
 class AddRobot(Command, wire="add_robot"):
-    """Add a built-in robot (puma260, puma560) at world ``base`` (4x4) with initial joint
-    values ``q`` (rad/m; default: its home pose), optionally with the parallel gripper."""
+    """Add a library robot (``workcell.robots.library()``: puma260, ur5e, kuka_kr6_r700, ...)
+    at world ``base`` (4x4) with initial joint values ``q`` (rad/m; default: its home pose),
+    optionally with the parallel gripper."""
 
     name: str = arg(a.name)
-    robot: str = arg(a.choice("puma260", "puma560"), "puma260")
+    robot: str = arg(a.choice(*library()), "puma260")
     gripper: bool = arg(a.boolean, False)
     base: tuple[tuple[float, ...], ...] | None = arg(_opt_matrix, None)
     q: tuple[float, ...] | None = arg(a.optional(a.vector), None)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 from typing import Any
 
@@ -46,10 +47,12 @@ def _shell(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from workcell.cli import check_outputs
     from workcell.errors import WorkcellError
     from workcell.program.interpreter import run_script
     from workcell.program.session import Session
 
+    check_outputs(rrd=args.save, png=args.render)
     session = Session(base_dir=Path(args.script).parent)
     try:
         run_script(args.script, session, echo=args.echo)
@@ -96,6 +99,11 @@ def _serve(args: argparse.Namespace) -> int:
         level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(message)s"
     )
     install_sigterm_cleanup()
+
+    def stop(signum: int, frame: object) -> None:  # SIGTERM stops as Ctrl-C does
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
     token = args.token or os.environ.get("WORKCELL_TOKEN") or None
     make = _start(args)
     make()  # a bad --cell or --mode fails here, not at each client's connection
@@ -216,13 +224,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="workcell")
     register(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)
-    from workcell.errors import WorkcellError
+    from workcell.cli import run_command
 
-    try:
-        return args.func(args)
-    except WorkcellError as exc:
-        print(f"workcell: {type(exc).__name__}: {exc}", file=sys.stderr)
-        return 2
+    return run_command(args)
 
 
 if __name__ == "__main__":

@@ -30,6 +30,7 @@ from workcell.program.grammar_model import (
 from workcell.program.keytree import Cursor, Keys, Leaf, Node, Options, Seq, Set
 from workcell.program.params import Choice, Name, Number, Ref, Text, Vector
 from workcell.program.targets import Target
+from workcell.robots.library import library
 
 __all__ = ["ALIASES", "BRANCHES"]
 
@@ -197,8 +198,7 @@ _ADD = Keys(
             Name("name", new=True, what="robot name"),
             Options(
                 {
-                    "puma260": Set("model", "puma260"),
-                    "puma560": Set("model", "puma560"),
+                    **{name: Set("model", name) for name in library()},
                     "gripper": Set("gripper", True),
                     "q": Vector("q", None, "angle", what="initial joint values (deg)"),
                     **TRANSFORM_OPTIONS,
@@ -212,8 +212,9 @@ _ADD = Keys(
                     transform_of(v),
                     v.get("q"),
                 ),
-                f"add robot NAME [puma260|puma560] [gripper] [q J1 .. Jn] {TRANSFORM_SYNTAX}",
-                "place a built-in robot (base pose by the transform; q in deg)",
+                f"add robot NAME [MODEL] [gripper] [q J1 .. Jn] {TRANSFORM_SYNTAX}",
+                "place a library robot (MODEL: puma260 (default), ur5e, kuka_kr6_r700, ... "
+                "see 'workcell robots'; base pose by the transform; q in deg)",
                 "add robot puma puma260 q 0 0 -90 0 90 0",
             ),
         ),

@@ -17,12 +17,15 @@ import json
 import os
 import secrets
 import socket
+import threading
+import time
 from pathlib import Path
 
 from workcell.errors import ProgramError
 from workcell.files import atomic_write_text
 
 __all__ = [
+    "Throttle",
     "is_loopback",
     "new_token",
     "read_token_file",
@@ -96,3 +99,34 @@ def remove_token_file(port: int, token: str) -> None:
     if read_token_file(port) == token:
         with contextlib.suppress(OSError):
             token_file(port).unlink()
+
+
+_MAX_DELAY = 8.0  # s: the longest wait for one wrong token
+
+
+class Throttle:
+    """Answers to wrong tokens from one address come ever later: ``delay`` (s) for the
+    first, doubling up to 8 s; attempts on parallel connections queue behind each
+    other; a right token resets the count."""
+
+    def __init__(self, delay: float) -> None:
+        self.delay = delay
+        self._lock = threading.Lock()
+        self._state: dict[str, tuple[int, float]] = {}  # address -> (failures, next answer)
+
+    def failed(self, addr: str) -> float:
+        """Sleep as long as this failure earns; return the seconds slept."""
+        with self._lock:
+            n, ready = self._state.get(addr, (0, 0.0))
+            now = time.monotonic()
+            ready = max(ready, now) + min(self.delay * 2.0 ** min(n, 30), _MAX_DELAY)
+            self._state[addr] = (n + 1, ready)
+        wait = ready - now
+        if wait > 0:
+            time.sleep(wait)
+        return wait
+
+    def succeeded(self, addr: str) -> None:
+        """A right token from ``addr``: its count starts again."""
+        with self._lock:
+            self._state.pop(addr, None)

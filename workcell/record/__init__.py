@@ -16,6 +16,7 @@ from workcell.errors import RecordError, RenderError
 
 _LAZY = {
     "RecordStats": "workcell.record.rerun_log",
+    "check_recording_path": "workcell.record.rerun_log",
     "default_blueprint": "workcell.record.rerun_log",
     "log_timeline": "workcell.record.rerun_log",
     "record": "workcell.record.rerun_log",

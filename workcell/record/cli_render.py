@@ -77,8 +77,10 @@ def _concavity_option(parser: argparse.ArgumentParser) -> None:
 
 
 def _render(args: argparse.Namespace) -> int:
+    from workcell.cli import check_outputs
     from workcell.record.render import gl_backend, render_cell, save_png
 
+    check_outputs(png=args.out)
     t0 = time.perf_counter()
     cell = load_cell(args.cell)
     image = render_cell(

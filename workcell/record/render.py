@@ -459,5 +459,5 @@ def save_png(image: NDArray[np.uint8], path: str | os.PathLike) -> Path:
     if a.dtype != np.uint8 or a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (3, 4)):
         raise RenderError(f"image must be (H, W[, 3|4]) uint8, got {a.shape} {a.dtype}")
     p = Path(path)
-    atomic_write_bytes(p, _png_bytes(a))
+    atomic_write_bytes(p, _png_bytes(a), error=RenderError)
     return p

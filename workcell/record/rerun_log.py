@@ -57,7 +57,7 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from workcell.errors import RecordError
-from workcell.files import atomic_path
+from workcell.files import atomic_path, check_writable
 from workcell.record.rr_scene import (
     EVENTS,
     GRIPPERS,
@@ -82,6 +82,7 @@ __all__ = [
     "RecordError",
     "RecordStats",
     "body_entity",
+    "check_recording_path",
     "default_blueprint",
     "gripper_entity",
     "joint_entity",
@@ -308,6 +309,16 @@ def _spawn_viewer(port: int) -> str:
     return f"rerun+http://127.0.0.1:{port}/proxy"
 
 
+def check_recording_path(path: str | os.PathLike[str]) -> Path:
+    """``path`` if a recording can be written there (an ``.rrd`` name in a writable folder,
+    see :func:`workcell.files.check_writable`), else RecordError; call it before the work."""
+    target = Path(path)
+    if target.suffix != ".rrd":
+        raise RecordError(f"a recording file must end in .rrd, got '{target}'")
+    check_writable(target, error=RecordError)
+    return target
+
+
 def record(
     sim: Simulator,
     path: str | os.PathLike[str] | None = None,
@@ -350,14 +361,11 @@ def record(
         raise RecordError(f"images_fps must be a number in (0, 1000) per s, got {images_fps!r}")
     if not (isinstance(port, int) and 0 < port < 65536):
         raise RecordError(f"port must be an integer in 1..65535, got {port!r}")
-    target = None if path is None else Path(path)
-    if target is not None:
-        if target.suffix != ".rrd":
-            raise RecordError(f"a recording file must end in .rrd, got '{target}'")
-        if not target.parent.is_dir():
-            raise RecordError(f"cannot write '{target}': folder '{target.parent}' does not exist")
+    target = None if path is None else check_recording_path(path)  # before the work
     with contextlib.ExitStack() as stack:
-        tmp = None if target is None else stack.enter_context(atomic_path(target))
+        tmp = (
+            None if target is None else stack.enter_context(atomic_path(target, error=RecordError))
+        )
         rec = rr.RecordingStream(application_id, recording_id=recording_id)
         rec.set_log_time_enabled(False)
         try:

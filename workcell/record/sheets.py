@@ -17,7 +17,6 @@ import os
 import sys
 from collections.abc import Iterator, Sequence
 from fractions import Fraction
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import mujoco
@@ -25,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workcell.errors import RenderError
-from workcell.files import atomic_path
+from workcell.files import atomic_path, check_writable
 from workcell.record.render import CellRenderer, _camera_for, _frames_qpos, save_png
 
 if TYPE_CHECKING:
@@ -115,6 +114,7 @@ def contact_sheet(
     from PIL import Image as PILImage
     from PIL import ImageDraw
 
+    check_writable(path, error=RenderError)  # before the rendering
     keys = key_frames(sim, kinds)
     n = len(keys)
     cols = columns if columns else math.ceil(math.sqrt(n))
@@ -184,11 +184,11 @@ def save_mp4(
         raise RenderError(f"fps must be a finite number > 0, got {fps!r}")
     if width % 2 or height % 2:
         raise RenderError(f"MP4 width and height must be even, got {width} x {height}")
+    p = check_writable(path, error=RenderError)  # before the rendering
     idx = video_frames(sim, fps)
     show = sys.stderr.isatty() if progress is None else progress
-    p = Path(path)
     with (
-        atomic_path(p, suffix=p.suffix) as tmp,
+        atomic_path(p, suffix=p.suffix, error=RenderError) as tmp,
         av.open(tmp, mode="w", format="mp4") as out,
     ):
         stream = out.add_stream("libx264", rate=Fraction(fps).limit_denominator(1000))

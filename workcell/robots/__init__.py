@@ -1,7 +1,8 @@
-"""Robots (thesis ch. 4.2-4.3): DH chains, the built-in Pumas, grippers, forward and inverse kinematics."""
+"""Robots (thesis ch. 4.2-4.3): serial chains, the library of built-in arms, grippers, forward and inverse kinematics."""
 
 from workcell.robots.chain import DH, Joint
 from workcell.robots.gripper import Gripper, GripperPart, attach_gripper, parallel_gripper
+from workcell.robots.library import get, library
 from workcell.robots.puma import puma260, puma560
 from workcell.robots.robot import IKSolution, LinkGeometry, Robot
 
@@ -14,6 +15,8 @@ __all__ = [
     "LinkGeometry",
     "Robot",
     "attach_gripper",
+    "get",
+    "library",
     "parallel_gripper",
     "puma260",
     "puma560",

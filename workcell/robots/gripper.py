@@ -184,14 +184,18 @@ def default_mount(robot: Robot) -> Array:
     wrist centre) gets its flange face instead: the highest point along z of its
     last link's solids, Tz(z_top) (the identity when the last link has no solids).
     """
-    if not np.allclose(robot.tool, np.eye(4), atol=1e-12) or robot.model is None:
+    if not np.allclose(robot.tool, np.eye(4), atol=1e-12) or not robot.geometry:
         return robot.tool.copy()
     top = 0.0
     for g in robot.geometry:
         if g.link == robot.dof:
-            V = spatial.transform_points(
-                g.transform, robot.model.world_mesh(("block", g.block)).vertices
-            )
+            if g.mesh is not None:
+                vertices = g.mesh.vertices
+            elif robot.model is not None:
+                vertices = robot.model.world_mesh(("block", g.block)).vertices
+            else:
+                continue
+            V = spatial.transform_points(g.transform, vertices)
             top = max(top, float(V[:, 2].max()))
     return spatial.translation(0, 0, top)
 
@@ -217,8 +221,9 @@ def attach_gripper(robot: Robot, gripper: Gripper, *, mount: ArrayLike | None = 
         else as_transform(mount, rigid=True, name="gripper mount")
     )
     model = Model()
-    if robot.model is not None and robot.geometry:
-        copy_blocks(robot.model, dict.fromkeys(g.block for g in robot.geometry), model)
+    blocks = [g.block for g in robot.geometry if g.block is not None]
+    if robot.model is not None and blocks:
+        copy_blocks(robot.model, dict.fromkeys(blocks), model)
     names = copy_blocks(
         gripper.model, [p.block for p in gripper.geometry], model, prefix=f"{gripper.name}."
     )

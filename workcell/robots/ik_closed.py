@@ -36,7 +36,6 @@ and q6 is solved so the pose stays exact.
 
 from __future__ import annotations
 
-import functools
 import math
 import weakref
 from dataclasses import dataclass
@@ -47,6 +46,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from workcell import spatial
 from workcell.errors import GeometryError, KinematicsError
+from workcell.robots.ik_wrap import DEDUPE_TOL, distinct, limits_reason, rows_of, wrap_pi
 from workcell.robots.robot import IKSolution, Robot
 from workcell.spatial import invert
 
@@ -65,13 +65,10 @@ __all__ = [
 Array = NDArray[np.float64]
 CONFIGS: tuple[str, ...] = ("lun", "luf", "ldn", "ldf", "run", "ruf", "rdn", "rdf")
 """Slot order of :func:`ik_batch` and the default order of :func:`ik_all`."""
-DEDUPE_TOL = 1e-9  # rad: solutions closer than this (modulo 2 pi) are the same
 EXACT_TOL = 1e-9  # m and rad: a solution is exact when FK(q) is this close to T
 _ORTHO_TOL = 1e-13  # |R^T R - I| of base and tool below which errors are measured in floats
 _CF = "closed-form"
-_TWO_PI = 2.0 * math.pi
-_INV_TWO_PI = 1.0 / _TWO_PI
-_PI = math.pi
+_INV_TWO_PI = 1.0 / (2.0 * math.pi)
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,91 +181,6 @@ def family_model(robot: Robot) -> Any:
     return _solver(robot).model
 
 
-# ---------------------------------------------------------------- joint values
-def _shift(S: _Solver, j: int, q: float, near_t: float | None) -> float | None:
-    """``Robot.wrap_batch`` for the value ``q`` (rad) of joint ``j``, in floats: the 2 pi
-    equivalent within the limits nearest to ``near_t`` (turns; None: to q), or None."""
-    lo, hi, lo_t, hi_t = S.joints[j]
-    t = q * _INV_TWO_PI
-    k_lo = math.ceil(lo_t - t)
-    k_hi = math.floor(hi_t - t)
-    if k_lo > k_hi:
-        return None
-    k = 0 if near_t is None else round(near_t - t)
-    k = k_lo if k < k_lo else k_hi if k > k_hi else k
-    x = q + _TWO_PI * k
-    return lo if x < lo else hi if x > hi else x
-
-
-def _rows(
-    S: _Solver, sols: list[tuple[int, tuple[float, ...], bool]], near: tuple[float | None, ...]
-) -> tuple[list[list[float]], list[list[float]], list[tuple[bool, ...] | None]]:
-    """For each solution's family angles theta: q = sign (theta + offset) wrapped to
-    (-pi, pi] (``Q``), the returned q (the in-limit representative of every joint, nearest
-    to ``near``, q_current in turns, else Q) and the flags (None, or per joint whether it
-    has an in-limit value). A value within its limits and within half a turn of ``near``
-    is its own representative (``wrap_batch``'s k = 0); :func:`_shift` does the others.
-    Written out joint by joint: this runs for every pose."""
-    (s1, s2, s3, s4, s5, s6), (o1, o2, o3, o4, o5, o6) = S.signs, S.offs
-    (l1, h1, _, _), (l2, h2, _, _), (l3, h3, _, _) = S.joints[:3]
-    (l4, h4, _, _), (l5, h5, _, _), (l6, h6, _, _) = S.joints[3:]
-    n1, n2, n3, n4, n5, n6 = near
-    pi, two_pi, inv = _PI, _TWO_PI, _INV_TWO_PI
-    Qs: list[list[float]] = []
-    rows: list[list[float]] = []
-    flags: list[tuple[bool, ...] | None] = []
-    for _, (t1, t2, t3, t4, t5, t6), _ in sols:
-        q1 = pi - (pi - s1 * (t1 + o1)) % two_pi
-        q2 = pi - (pi - s2 * (t2 + o2)) % two_pi
-        q3 = pi - (pi - s3 * (t3 + o3)) % two_pi
-        q4 = pi - (pi - s4 * (t4 + o4)) % two_pi
-        q5 = pi - (pi - s5 * (t5 + o5)) % two_pi
-        q6 = pi - (pi - s6 * (t6 + o6)) % two_pi
-        w1, w2, w3, w4, w5, w6 = q1, q2, q3, q4, q5, q6
-        if not (l1 <= q1 <= h1 and (n1 is None or -0.5 <= n1 - q1 * inv <= 0.5)):
-            w1 = _shift(S, 0, q1, n1)
-        if not (l2 <= q2 <= h2 and (n2 is None or -0.5 <= n2 - q2 * inv <= 0.5)):
-            w2 = _shift(S, 1, q2, n2)
-        if not (l3 <= q3 <= h3 and (n3 is None or -0.5 <= n3 - q3 * inv <= 0.5)):
-            w3 = _shift(S, 2, q3, n3)
-        if not (l4 <= q4 <= h4 and (n4 is None or -0.5 <= n4 - q4 * inv <= 0.5)):
-            w4 = _shift(S, 3, q4, n4)
-        if not (l5 <= q5 <= h5 and (n5 is None or -0.5 <= n5 - q5 * inv <= 0.5)):
-            w5 = _shift(S, 4, q5, n5)
-        if not (l6 <= q6 <= h6 and (n6 is None or -0.5 <= n6 - q6 * inv <= 0.5)):
-            w6 = _shift(S, 5, q6, n6)
-        Q = [q1, q2, q3, q4, q5, q6]
-        Qs.append(Q)
-        if w1 is None or w2 is None or w3 is None or w4 is None or w5 is None or w6 is None:
-            rows.append(Q)
-            w = (w1, w2, w3, w4, w5, w6)
-            flags.append(tuple(v is not None for v in w))
-        else:
-            rows.append([w1, w2, w3, w4, w5, w6])
-            flags.append(None)
-    return Qs, rows, flags
-
-
-def _wrap_pi(q: Array) -> Array:
-    return _PI - np.mod(_PI - q, _TWO_PI)
-
-
-def _distinct(Q: Array) -> NDArray[np.bool_]:
-    """Rows of Q (m, 6) that differ (modulo 2 pi, by DEDUPE_TOL) from every earlier row."""
-    D = np.abs(_wrap_pi(Q[:, None, :] - Q[None, :, :])).max(axis=-1)
-    return ~np.tril(D < DEDUPE_TOL, k=-1).any(axis=1)
-
-
-@functools.cache
-def _limits_reason(ok: tuple[bool, ...]) -> str:
-    bad = [str(j + 1) for j, good in enumerate(ok) if not good]
-    many = len(bad) > 1
-    return (
-        f"outside joint limits: joint{'s' if many else ''} {', '.join(bad)} "
-        f"ha{'ve' if many else 's'} no 2 pi-equivalent within the limits"
-    )
-
-
 def _reference(robot: Robot, q_current: ArrayLike | None, shape: tuple[int, ...]) -> Array | None:
     if q_current is None:
         return None
@@ -330,9 +242,9 @@ def ik_report(
         near = tuple(v * _INV_TWO_PI for v in ref_l)
     slots = [sol[0] for sol in sols]
     singular = [sol[2] for sol in sols]
-    Qs, qs, flags = _rows(S, sols, near)
+    Qs, qs, flags = rows_of(S.signs, S.offs, S.joints, sols, near)
     if maybe_dup:
-        keep = _distinct(np.array(Qs)).tolist()
+        keep = distinct(np.array(Qs)).tolist()
         pick = [i for i, k in enumerate(keep) if k]
         slots, singular = [slots[i] for i in pick], [singular[i] for i in pick]
         qs, flags = [qs[i] for i in pick], [flags[i] for i in pick]
@@ -360,7 +272,7 @@ def ik_report(
         dp, dr = errors[i]
         bad = flags[i]
         if bad is not None:
-            why = _limits_reason(bad)
+            why = limits_reason(bad)
         elif dp > EXACT_TOL or dr > EXACT_TOL:
             why = f"pose not reached exactly: errors {dp:.1e} m, {dr:.1e} rad"
         else:
@@ -416,15 +328,32 @@ def ik_batch(
     ref = _reference(robot, q_current, ((6,), (N, 6)))
     if ref is not None:
         ref = np.broadcast_to(ref, (N, 6))
+    Q = np.empty((N, 8, 6))
+    valid = np.empty((N, 8), dtype=bool)
+    for i in range(0, N, _CHUNK):  # chunks keep the temporaries in cache
+        j = min(N, i + _CHUNK)
+        Q[i:j], valid[i:j] = _batch(robot, S, T[i:j], None if ref is None else ref[i:j])
+    return Q, valid
+
+
+_CHUNK = 4096  # poses per step of ik_batch
+
+
+def _batch(
+    robot: Robot, S: _Solver, T: Array, ref: Array | None
+) -> tuple[Array, NDArray[np.bool_]]:
     M = T if S.pre is None else S.pre @ T
     M = M if S.post is None else M @ S.post
     signs, offs = np.array(S.signs), np.array(S.offs)
-    ref_t = (np.zeros((N, 6)) if ref is None else ref) * signs - offs
+    ref_t = (np.zeros((len(T), 6)) if ref is None else ref) * signs - offs
     theta, exists, degenerate = S.solve_batch(S.model, M, ref_t)
-    Q = _wrap_pi(signs * (theta + offs))
-    for n in np.flatnonzero(degenerate & exists.any(axis=1)):
-        idx = np.flatnonzero(exists[n])
-        exists[n, idx[~_distinct(Q[n, idx])]] = False
+    Q = wrap_pi(signs * (theta + offs))
+    rows = np.flatnonzero(degenerate & exists.any(axis=1))
+    if len(rows):  # a slot equal (modulo 2 pi) to an earlier existing slot is dropped
+        Qd, ed = Q[rows], exists[rows]
+        D = np.abs(wrap_pi(Qd[:, :, None, :] - Qd[:, None, :, :])).max(axis=-1)
+        same = (D < DEDUPE_TOL) & ed[:, None, :] & np.tril(np.ones((8, 8), dtype=bool), k=-1)
+        exists[rows] = ed & ~same.any(axis=2)
     W, ok = robot.wrap_batch(Q, None if ref is None else ref[:, None, :])
     Qw = np.where(ok.all(axis=-1, keepdims=True), W, Q)
     Qw[~exists] = np.nan

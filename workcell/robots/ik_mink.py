@@ -38,6 +38,11 @@ __all__ = ["MinkContext", "mink_context"]
 MINK_SOLVER = "daqp"
 MINK_LM_DAMPING = 0.1
 MINK_DAMPING = 1e-12
+# Redundant arms (more than 6 joints): a posture task pulls the self-motion towards the
+# attempt's start q; it is dropped once the pose is within POSTURE_HANDOFF (m and rad),
+# so the last iterations reach the exact pose without trading it against the posture.
+POSTURE_COST = 1e-2
+POSTURE_HANDOFF = 1e-3
 
 
 # ---------------------------------------------------------------------------------- mink
@@ -47,8 +52,9 @@ class MinkContext:
 
     ``model`` the kinematic MjModel (joint i = ``robot.joints[i]``, site ``"tool"``);
     ``configuration`` its mink Configuration (holds its own MjData); ``task`` the
-    FrameTask on the tool site; ``limits`` the prebuilt
-    ``[ConfigurationLimit]``; ``lock`` serialises solves (the Configuration is shared).
+    FrameTask on the tool site; ``posture`` a PostureTask for redundant arms (None
+    otherwise); ``limits`` the prebuilt ``[ConfigurationLimit]``; ``lock`` serialises
+    solves (the Configuration is shared).
     """
 
     model: mujoco.MjModel
@@ -57,6 +63,7 @@ class MinkContext:
     limits: list[mink.ConfigurationLimit]
     site_id: int
     length: float
+    posture: mink.PostureTask | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
 
 
@@ -85,6 +92,7 @@ def mink_context(robot: Robot) -> MinkContext:
         limits=[mink.ConfigurationLimit(model)],
         site_id=site_id,
         length=_length_scale(robot),
+        posture=mink.PostureTask(model, cost=POSTURE_COST) if robot.dof > 6 else None,
     )
     _MINK_CACHE[robot] = ctx
     return ctx
@@ -104,13 +112,15 @@ def _mink_attempt(
 
     An attempt stalls when its best error ``position + length * orientation`` has not
     improved by ``STALL_IMPROVEMENT`` (relative) for ``STALL_WINDOW`` iterations, or when
-    its step vanishes.
+    its step vanishes. A redundant arm's posture task (target: the solve's q0, set by
+    the caller) acts until the pose is within ``POSTURE_HANDOFF``.
     """
     task, length = ctx.task, ctx.length
     cfg, data, sid = ctx.configuration, ctx.configuration.data, ctx.site_id
     p_t, R_t = T_target[:3, 3], T_target[:3, :3]
     task.set_target(mink.SE3.from_matrix(T_target))
     cfg.update(np.clip(q_start, robot.lower, robot.upper))
+    posture = ctx.posture  # its target was set by the solve (its q0)
 
     def errors() -> tuple[float, float]:
         p = data.site_xpos[sid]
@@ -124,9 +134,11 @@ def _mink_attempt(
     for it in range(1, max_iterations + 1):
         if ep <= tol_p and eo <= tol_o:
             return _Attempt(cfg.q, ep, eo, it - 1, "converged", seed)
+        far = ep > POSTURE_HANDOFF or eo > POSTURE_HANDOFF
+        tasks = [task, posture] if posture is not None and far else [task]
         try:
             dq = mink.solve_ik(
-                cfg, [task], 1.0, MINK_SOLVER, damping=MINK_DAMPING, limits=ctx.limits
+                cfg, tasks, 1.0, MINK_SOLVER, damping=MINK_DAMPING, limits=ctx.limits
             )
         except mink.NoSolutionFound:
             best.status, best.iterations = "qp failed", it
@@ -215,6 +227,8 @@ def _solve_mink(
         budget = min(budget, UNREACHABLE_RESTARTS)
     seeds = _mink_seeds(robot, q_start, closed, config, budget, rng)
     with ctx.lock:  # the attempts share the cached Configuration
+        if ctx.posture is not None:  # a redundant arm prefers the self-motion nearest q0
+            ctx.posture.set_target(np.clip(q_start, robot.lower, robot.upper))
         return best_of_attempts(
             robot,
             T_target,

@@ -11,7 +11,9 @@ reserves it).
 Link solids (``robot.geometry``) become, per solid, one visual mesh geom (the exact mesh,
 ``inertia="exact"``, ``density`` kg/m^3, group 2, no contacts) and convex collision geoms
 (group 3, density 0; see :mod:`workcell.meshgeoms` for the pieces), so each body's
-mass and inertia are those of its exact meshes. A body without solids keeps a small
+mass and inertia are those of its exact meshes. A mesh entry (``LinkGeometry.mesh``, e.g.
+from a robot description's file) gives its mesh as the visual geom and its own convex
+``collision`` pieces (else its hull) as the collision geoms. A body without solids keeps a small
 placeholder inertia. A gripper (``robot.gripper``) is a body ``{prefix}{gripper}`` fixed to
 the last link at its mount, with the palm, and two finger bodies on slide joints
 ``{prefix}{gripper}.left_slide`` / ``.right_slide`` (axis +y / -y of the gripper frame,
@@ -53,7 +55,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workcell.errors import GeometryError, ModelError
-from workcell.files import atomic_write_bytes, atomic_write_text
+from workcell.files import write_files
 from workcell.meshgeoms import (
     MESHDIR,
     MeshAssets,
@@ -61,7 +63,7 @@ from workcell.meshgeoms import (
     collision_meshes,
     convex_pieces,
 )
-from workcell.robots.robot import Robot
+from workcell.robots.robot import LinkGeometry, Robot
 from workcell.spatial import invert, is_rigid, quat_from_matrix
 
 __all__ = [
@@ -164,6 +166,27 @@ def _add_solid(
     )
 
 
+def _add_mesh(body: mujoco.MjsBody, g: LinkGeometry, density: float, reg: MeshAssets) -> None:
+    """A mesh entry of ``robot.geometry``: its visual mesh (mass carrier) and its convex
+    collision pieces (or its hull), placed by ``g.transform`` (baked in when not rigid)."""
+    rgba = list(g.colour) if g.colour is not None else [0.7, 0.7, 0.72, 1.0]
+    name = f"{reg.prefix}link{g.link}.mesh"
+    pieces = list(g.collision) or [g.mesh.convex_hull]
+    T = g.transform
+    if is_rigid(T):
+        vis, P = reg.add(name, g.mesh), T
+    else:
+        vis, P = reg.add(name, g.mesh.copy().apply_transform(T)), np.eye(4)
+        pieces = [p.copy().apply_transform(T).convex_hull for p in pieces]
+    col = collision_meshes(reg, name, pieces, False, vis)
+    pos, quat = _pos_quat(P)
+    gname = reg.unique(name)
+    add_mesh_geoms(
+        body, [(gname, vis)], col, collision_prefix=gname, pos=pos, quat=quat,
+        density=density, rgba=rgba,
+    )  # fmt: skip
+
+
 def _check_prefix(prefix: str) -> None:
     if "/" in prefix:
         raise ModelError(
@@ -202,7 +225,7 @@ def robot_spec(
     spec = mujoco.MjSpec()
     spec.compiler.degree = False
     spec.modelname = robot.name
-    with_geo = geometry and robot.model is not None and bool(robot.geometry)
+    with_geo = geometry and bool(robot.geometry)
     gripper = robot.gripper if with_geo else None
     gripper_blocks = {p.block for p in gripper.geometry} if gripper is not None else set()
     reg = MeshAssets(spec, prefix)
@@ -211,12 +234,17 @@ def robot_spec(
 
     def fill(body: mujoco.MjsBody, k: int) -> None:
         solids = [] if not with_geo else robot.geometry
-        mine = [g for g in solids if g.link == k and g.block not in gripper_blocks]
+        mine = [
+            g for g in solids if g.link == k and (g.block is None or g.block not in gripper_blocks)
+        ]
         if not mine:
             body.mass, body.inertia = mass, inertia
             return
         for g in mine:
-            _add_solid(body, robot, g.block, g.transform, g.colour, density, reg, cache)
+            if g.mesh is not None:
+                _add_mesh(body, g, density, reg)
+            else:
+                _add_solid(body, robot, g.block, g.transform, g.colour, density, reg, cache)
 
     bodies: list[tuple[str, int]] = []
     parent = spec.worldbody.add_body(name=body_name(prefix, 0))
@@ -392,10 +420,7 @@ def export_robot(
         xml = spec_to_xml(spec)
     except ValueError as exc:
         raise GeometryError(f"robot '{robot.name}' does not compile in MuJoCo: {exc}") from exc
-    out = Path(out_dir)
-    (out / MESHDIR).mkdir(parents=True, exist_ok=True)
-    for file, data in spec.assets.items():
-        atomic_write_bytes(out / MESHDIR / file, data)
-    path = out / (file_name or f"{prefix}{robot.name}.xml")
-    atomic_write_text(path, xml)
-    return path
+    name = file_name or f"{prefix}{robot.name}.xml"
+    files = {f"{MESHDIR}/{file}": data for file, data in spec.assets.items()}
+    write_files(out_dir, {**files, name: xml.encode("utf-8")}, error=ModelError)
+    return Path(out_dir) / name

@@ -283,5 +283,5 @@ def solve_batch(
     th[:, :, 1, 3:] = np.where(n_first[..., None], twin, first)
     exists = np.stack([ok, ok & ~aligned], axis=-1)  # an aligned wrist: one solution, n
     degenerate = free | (xs < DEGENERATE * np.maximum(np.sqrt(r2), 1e-300))
-    degenerate |= (np.minimum(kappa, _PI - kappa) < DEGENERATE).any(axis=1)
+    degenerate |= ((np.minimum(kappa, _PI - kappa) < DEGENERATE) & ok).any(axis=1)
     return th.reshape(N, 8, 6), exists.reshape(N, 8), degenerate

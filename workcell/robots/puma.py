@@ -10,6 +10,10 @@ Sources:
   +-atan2(0.75, 7.8) = +-5.4923 deg offsets; exact values, as DESIGN.md tables them);
   flange at Tz(0.05588) from frame 6; joint speed limits of a 260-class arm from the
   same source. Thesis home pose (0, 0, -90, 0, 90, 0) deg.
+- Speeds of the Puma 560: none in the sources used (Corke's model has none); it is given
+  the 260-class speeds above (an assumption, documented as such). Accelerations and jerks
+  of both are derived from the speeds (:func:`workcell.robots.library.derived_limits`).
+  The thesis examples keep their own constant nominal speed (``nominal_speed``, 0.3 rad/s).
 """
 
 from __future__ import annotations
@@ -51,6 +55,14 @@ _PUMA260_LIMITS = [(-160, 160), (-76, 256), (-214, 34), (-194, 384), (-122, 122)
 _PUMA260_SPEEDS = [119, 119, 164, 577, 431, 397]  # deg/s
 
 
+def _limits(speeds_deg: list[int]) -> dict[str, list[float]]:
+    """Speeds (deg/s) and the accelerations and jerks derived from them (deg/s^2, deg/s^3)."""
+    from workcell.robots.library import derived_limits
+
+    acc, jerk = derived_limits(speeds_deg)  # linear in the speeds: degrees in, degrees out
+    return {"max_speed_deg": speeds_deg, "max_acceleration_deg": acc, "max_jerk_deg": jerk}
+
+
 def _geometry(robot: Robot, *, scale: float) -> Robot:
     from workcell.robots.geometry import puma_geometry
 
@@ -61,7 +73,7 @@ def puma560(*, geometry: bool = True) -> Robot:
     """The Puma 560 (standard DH, Corke's table); link solids when ``geometry``."""
     r = Robot(
         name="puma560",
-        joints=joints_from_table(_PUMA560, _PUMA560_LIMITS),
+        joints=joints_from_table(_PUMA560, _PUMA560_LIMITS, **_limits(_PUMA260_SPEEDS)),
         poses={
             "qz": np.zeros(6),
             "qr": np.array([0, np.pi / 2, -np.pi / 2, 0, 0, 0]),
@@ -69,7 +81,8 @@ def puma560(*, geometry: bool = True) -> Robot:
             "qn": np.array([0, np.pi / 4, -np.pi, 0, np.pi / 4, 0]),
             "home": np.array([0, 0, -90, 0, 90, 0]) * _DEG,
         },
-        source="P. Corke, Robotics Toolbox for Python, models/DH/Puma560.py (standard DH)",
+        source="P. Corke, Robotics Toolbox for Python, models/DH/Puma560.py (standard DH); "
+        "speeds assumed as the Puma 260's (none published in the sources)",
     )
     return _geometry(r, scale=1.0) if geometry else r
 
@@ -78,12 +91,13 @@ def puma260(*, geometry: bool = True) -> Robot:
     """The Puma 260 (standard DH, Puma 560 convention); tool at the flange Tz(0.05588)."""
     r = Robot(
         name="puma260",
-        joints=joints_from_table(_PUMA260, _PUMA260_LIMITS, max_speed_deg=_PUMA260_SPEEDS),
+        joints=joints_from_table(_PUMA260, _PUMA260_LIMITS, **_limits(_PUMA260_SPEEDS)),
         tool=spatial.translation(0, 0, PUMA260_FLANGE),
         poses={
             "home": np.array([0, 0, -90, 0, 90, 0]) * _DEG,
             "zero": np.zeros(6),
         },
-        source="RPI General Robotics Toolbox puma260b_robot(), after the Puma 260 manual p. 2-2",
+        source="RPI General Robotics Toolbox puma260b_robot(), after the Puma 260 manual p. 2-2 "
+        "(geometry and joint speeds)",
     )
     return _geometry(r, scale=0.46) if geometry else r

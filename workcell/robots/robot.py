@@ -19,6 +19,7 @@ from functools import partial
 from typing import TYPE_CHECKING, Literal, NamedTuple
 
 import numpy as np
+import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from workcell.errors import JointLimitError, KinematicsError, UnreachableError
@@ -38,12 +39,27 @@ _FK_CHUNK = 2048  # poses per batched FK step (measured: 1.5M poses/s here again
 
 @dataclass(frozen=True)
 class LinkGeometry:
-    """A modeller block drawn on link ``link`` (0 = base, i = after joint i), placed by ``transform``."""
+    """One solid on link ``link`` (0 = base, i = after joint i), placed by ``transform``
+    (4x4) in that link's frame: a modeller ``block`` of ``Robot.model``, or a ``mesh``
+    (a closed ``trimesh.Trimesh``, m, e.g. read from a robot description's file) with
+    its convex ``collision`` pieces (in the mesh's frame; empty: its convex hull).
+    Exactly one of ``block`` and ``mesh`` is given. RGBA ``colour``; ``source`` says
+    where a mesh came from (a file path), for messages and saving.
+    """
 
     link: int
-    block: str
+    block: str | None
     transform: Array
     colour: tuple[float, ...] | None = None
+    mesh: trimesh.Trimesh | None = None
+    collision: tuple[trimesh.Trimesh, ...] = ()
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if (self.block is None) == (self.mesh is None):
+            raise KinematicsError(
+                f"link {self.link} geometry: give exactly one of a modeller block and a mesh"
+            )
 
 
 class IKSolution(NamedTuple):

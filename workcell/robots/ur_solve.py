@@ -244,5 +244,5 @@ def solve_batch(
         theta[rows[e], s[e]] = cand[rows[e], c]
         have[rows[e], s[e]] = True
     degenerate = free | (hs < DEGENERATE * np.maximum(np.sqrt(r2), 1e-300))
-    degenerate |= (np.minimum(k, _PI - k) < DEGENERATE).reshape(N, -1).any(axis=1)
+    degenerate |= ((np.minimum(k, _PI - k) < DEGENERATE) & ok).reshape(N, -1).any(axis=1)
     return theta, have, degenerate

@@ -25,6 +25,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell import limits
 from workcell.cell.workcell import RobotPlacement
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, KinematicsError, ProgramError, UnreachableError
@@ -133,6 +134,9 @@ def line_waypoints(
     p0, p1 = T_start[:3, 3], T_goal[:3, 3]
     length = float(np.linalg.norm(p1 - p0))
     angle = angle_between(T_start[:3, :3], T_goal[:3, :3])
+    limits.check(
+        "max_frames_per_command", length / step, f"a {length:.4g} m line sampled every {step:g} m"
+    )
     n = max(1, math.ceil(length / step - 1e-9), math.ceil(angle / _ANGLE_STEP - 1e-9))
     s = np.arange(1, n + 1) / n
     poses = np.repeat(np.eye(4)[None], n, axis=0)

@@ -53,6 +53,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell import limits
 from workcell.checks import is_finite_number
 from workcell.errors import ProgramError
 from workcell.sim.contacts import DEFAULT_TOLERANCE, ContactMonitor
@@ -184,6 +185,9 @@ class _Run:
         self.weld_key = {e: k for k, e in self.weld_id.items()}
         # steps, recorded frames, grasp events
         self.program_time = float(self.plan.t[-1])
+        limits.check(
+            "max_frames_per_command", (self.program_time + settle) / h, "run_physics: steps"
+        )
         self.n_prog = math.floor(self.program_time / h + 1e-9)  # steps 0..n_prog: program
         self.n_end = max(math.ceil((self.program_time + settle) / h - 1e-9), 1)
         self.dt = float(getattr(sim, "dt", h))

@@ -20,6 +20,8 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell import limits
+
 __all__ = ["PROFILES", "duration", "progress", "step_times"]
 
 _REMAINDER_TOL = 1e-9  # a remainder below this fraction of dT is no step
@@ -71,6 +73,7 @@ def step_times(T: float, dt: float) -> Array:
     """
     if not T > 0:
         return np.empty(0)
+    limits.check("max_frames_per_command", T / dt, f"a motion of {T:.4g} s sampled every {dt:g} s")
     m = math.floor(T / dt)
     rem = T - m * dt
     t = dt * np.arange(1, m + 1, dtype=np.float64)

@@ -87,6 +87,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from tqdm import tqdm
 
+from workcell import limits
 from workcell.cell.compile import CompiledCell, compile_cell
 from workcell.cell.workcell import Workcell
 from workcell.checks import is_finite_number
@@ -343,6 +344,7 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
             raise ProgramError(f"wait: seconds must be a finite number >= 0, got {seconds!r}")
         self._not_in_block("wait")
         s = float(seconds)
+        limits.check("max_sim_time", self.sim_time + s, f"wait {s:.6g} s: the clock")
         with self._transaction():
             if s > 0:
                 c0 = time.perf_counter()
@@ -449,6 +451,10 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
             self._defer(name, times, Qr, command, detail)
             return
         k = len(times)
+        if k:  # before any work: the command's frames, the simulation's, its clock
+            limits.check("max_frames_per_command", k, f"{command} '{name}'")
+            limits.check("max_sim_time", float(times[-1]), f"{command} '{name}': the clock")
+            self.timeline.reserve(k, f"{command} '{name}'")
         carried = self._carried(name) if k else []
         rows = Qr if callable(Qr) else (lambda lo, hi: Qr[lo:hi])
         base, adr = self.data.qpos.copy(), self._qadr[name]

@@ -29,6 +29,8 @@ from typing import IO, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell import limits
+
 __all__ = ["DEFAULT_CHUNK", "DEFAULT_MEMORY_LIMIT", "Event", "Timeline", "TimelineMark"]
 
 DEFAULT_CHUNK = 4096
@@ -165,6 +167,15 @@ class Timeline:
     def __len__(self) -> int:
         return self._n
 
+    def reserve(self, k: int, what: str = "the simulation") -> None:
+        """Refuse (LimitError) ``k`` more frames over the ``max_frames`` or
+        ``max_spill_bytes`` limit (:mod:`workcell.limits`); :meth:`extend` checks too."""
+        n = self._n + k
+        limits.check("max_frames", n, f"{what}: the simulation's frames")
+        if self.memory_limit is not None:
+            spill = n * (2 + self.nq) * 8 - self.memory_limit
+            limits.check("max_spill_bytes", spill, f"{what}: the timeline's spill file")
+
     def append(self, sim_time: float, wall_time: float, qpos: ArrayLike) -> None:
         """Add one frame."""
         q = np.asarray(qpos, dtype=np.float64).reshape(1, -1)
@@ -181,6 +192,7 @@ class Timeline:
                 f"frames must be sim_times (k,), wall_times (k,) and qpos (k, {self.nq}); "
                 f"got {t.shape}, {w.shape}, {Q.shape}"
             )
+        self.reserve(k)
         done = 0
         while done < k:
             j = self._n % self.chunk
