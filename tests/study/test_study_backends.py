@@ -21,7 +21,7 @@ from workcell.study.pool import CRASH_MESSAGE
 MIXED = Study(
     cell="pick-place",
     vary={
-        "puma.robot": "puma260,puma560",
+        "puma.robot": "puma260,ur5e",
         "puma.base.x": "0:0.05:2",
         "puma.base.y": "-0.1,0",
     },
