@@ -6,8 +6,11 @@ Each backend runs the whole study in one call (its own start included: the proce
 pool's fork server and workers, Ray's workers; not ``ray.init``, which a cluster has
 already done), in this order: serial, process pool, Ray; then the tables are compared
 bit for bit. Targets (issue 13): 2 processes >= 1.7x serial, Ray (2 CPUs) >= 1.5x serial.
-Also: the peak memory of each worker process, and with ``--curve`` candidates per second
-against the process pool's worker count (1 to 4 on this machine).
+Also: the peak memory of each worker process, the workers' CPU time per candidate (the
+same in every backend when the workers do no extra work), and with ``--curve``
+candidates per second against the process pool's worker count (1 to 4 on this machine).
+A control before and after: how many times one busy loop's work two busy loops in two
+processes do (2.0 on two idle cores): on a shared machine the speed-ups are bounded by it.
 
 The machine is shared and noisy: the ratios are what one run measured, the three
 backends one after another.
@@ -107,6 +110,29 @@ def same_bits(a: pa.Table, b: pa.Table) -> bool:
     return True
 
 
+def _spin(n: int) -> int:
+    x = 0
+    for i in range(n):
+        x += i * i
+    return x
+
+
+def capacity(n: int = 10_000_000) -> float:
+    """How many times one process's work two plain busy processes do right now (2.0 on
+    two idle cores; less when other work shares them): the control for the ratios."""
+    import multiprocessing as mp
+
+    with mp.get_context("fork").Pool(2) as pool:
+        pool.map(_spin, [1000, 1000])  # started
+        t0 = time.perf_counter()
+        _spin(n)
+        one = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        pool.map(_spin, [n, n])
+        two = time.perf_counter() - t0
+    return 2 * one / two
+
+
 def memory(mb: dict[int, float]) -> str:
     return ", ".join(f"{v:.0f}" for v in sorted(mb.values())) + " MB"
 
@@ -123,6 +149,8 @@ def main() -> None:
     print(f"study: example 2, base over a {args.nx} x {args.ny} grid = {n} candidates")
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the start")
 
+    before = capacity()
+    print(f"control: 2 busy processes do {before:.2f}x the work of one right now (2.00 when idle)")
     serial = timed(s, "serial")
     feasible = sum(serial.table.column("feasible").to_pylist())
     print(f"({feasible} feasible)\n")
@@ -158,7 +186,11 @@ def main() -> None:
             print(
                 f"  {w} worker(s): {t.n / t.total:6.2f} cand/s, {t.steady:6.2f} after the first row"
             )
-    print(f"\nload average at the end: {os.getloadavg()[0]:.1f}")
+    after = capacity()
+    print(
+        f"\ncontrol again: {after:.2f}x; load average at the end: {os.getloadavg()[0]:.1f}. The "
+        "targets assume two free cores: compare the speed-ups with the controls."
+    )
 
 
 if __name__ == "__main__":
