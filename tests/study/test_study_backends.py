@@ -152,15 +152,26 @@ def test_ray_retries_a_killed_worker_then_writes_an_error_row(local_ray):
 
 
 @pytest.mark.slow
-def test_a_script_without_a_main_guard_is_told_what_to_do(tmp_path):
-    script = tmp_path / "study_script.py"
-    script.write_text(
+def test_a_script_without_a_main_guard(tmp_path):
+    """Alone, a script's workers are forks of it: no main guard needed. With a thread
+    running, workers come from the fork server, which imports the main script: without
+    the guard the study stops with a StudyError that says what to do."""
+    body = (
         "from workcell.study import Study, run\n"
-        "run(Study(cell='joints', vary={'puma.base.x': '0,0.1'}), backend='process', workers=1)\n"
+        "table = run(Study(cell='joints', vary={'puma.base.x': '0,0.1'}), workers=1)\n"
+        "print(table.num_rows, 'rows')\n"
     )
-    done = subprocess.run(
-        [sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path
+    thread = "import threading, time\nthreading.Thread(target=time.sleep, args=(60,), daemon=True).start()\n"
+    for name, text in (("alone.py", body), ("threaded.py", thread + body)):
+        (tmp_path / name).write_text(text)
+    alone = subprocess.run(
+        [sys.executable, "alone.py"], capture_output=True, text=True, timeout=300, cwd=tmp_path
     )
-    assert done.returncode != 0
-    assert "if __name__ == '__main__':" in done.stderr
-    assert "StudyError" in done.stderr
+    assert alone.returncode == 0, alone.stderr[-2000:]
+    assert "2 rows" in alone.stdout
+    threaded = subprocess.run(
+        [sys.executable, "threaded.py"], capture_output=True, text=True, timeout=300, cwd=tmp_path
+    )
+    assert threaded.returncode != 0
+    assert "if __name__ == '__main__':" in threaded.stderr
+    assert "StudyError" in threaded.stderr
