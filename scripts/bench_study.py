@@ -24,6 +24,7 @@ import argparse
 import os
 import shutil
 import tempfile
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -74,6 +75,9 @@ def timed(s: Study, name: str, workers: int | None = None) -> Timing:
         if first is None:
             first = time.perf_counter() - t0
     total = time.perf_counter() - t0
+    method = getattr(runner, "start_method", "")
+    if method:
+        print(f"({name}: workers started by {method}; {threading.active_count()} thread(s) here)")
     return Timing(total, first or total, len(todo), store.table(), runner.memory_mb, runner.cpu_s)
 
 

@@ -55,7 +55,18 @@ def test_serial_results(serial_table):
     assert rows[0]["puma.robot"] == "puma260"
 
 
-def test_process_pool_gives_the_same_rows_bit_for_bit(serial_table):
+@pytest.mark.parametrize("start", ["fork", "forkserver"])
+def test_process_pool_gives_the_same_rows_bit_for_bit(serial_table, start, monkeypatch):
+    """Workers forked from this process or from the fork server (whichever the parent's
+    threads allow, see workcell.study.pool): the same rows as one process."""
+    import multiprocessing
+
+    from workcell.study import pool
+
+    context = multiprocessing.get_context(start)
+    if start == "forkserver":
+        context.set_forkserver_preload(["workcell.study.evaluation"])
+    monkeypatch.setattr(pool, "_context", lambda: context)
     table = run(MIXED, backend="process", workers=2, batch_size=1, progress=False)
     assert _bits(table) == _bits(serial_table)
 

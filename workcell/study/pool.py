@@ -113,11 +113,24 @@ def stop_fork_server() -> None:
             finalizer()  # what would run at exit: remove the folder, forget it
 
 
+def _only_thread() -> bool:
+    """True when this process runs no Python thread but the main one, after stopping
+    tqdm's monitor thread (any tqdm bar, even a hidden one, starts it; a new bar starts
+    it again)."""
+    from tqdm import tqdm
+
+    monitor = tqdm.monitor
+    if monitor is not None and threading.active_count() == 2:
+        monitor.exit()
+        tqdm.monitor = None
+    return threading.active_count() == 1
+
+
 def _context() -> Any:
     """Fork from a single-threaded parent on Linux, else the fork server's context
     (preloading the simulator), else spawn's (module doc)."""
     methods = mp.get_all_start_methods()
-    if sys.platform == "linux" and "fork" in methods and threading.active_count() == 1:
+    if sys.platform == "linux" and "fork" in methods and _only_thread():
         return mp.get_context("fork")
     if "forkserver" in methods:
         ctx = mp.get_context("forkserver")
@@ -149,6 +162,7 @@ class ProcessPool:
         self._cpu0: dict[int, float] = {}
         self.crashes = 0
         self._ctx = _context()
+        self.start_method: str = self._ctx.get_start_method()
 
     def _start(self) -> _Worker:
         parent, child = self._ctx.Pipe(duplex=True)
