@@ -26,6 +26,8 @@ bench: $(STAMP)
 	$(BIN)/python scripts/bench_record.py
 	$(BIN)/python scripts/bench_server.py
 	$(BIN)/python scripts/bench_study.py
+	$(BIN)/python scripts/bench_motion.py
+	$(BIN)/python scripts/bench_plan.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

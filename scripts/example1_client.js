@@ -15,9 +15,28 @@ const net = require("net");
 const os = require("os");
 const path = require("path");
 
-const port = Number(process.argv[2] || 5260);
-const host = process.argv[3] || "127.0.0.1";
-const token = process.argv[4] || process.env.WORKCELL_TOKEN || localToken(port, host);
+const USAGE = `Usage: node scripts/example1_client.js [PORT] [HOST] [TOKEN]
+
+Runs the thesis's example 1 against a running \`workcell serve\` (protocol v1) and prints
+one JSON line: {"sim_time_s": ..., "frames": ..., "joints_deg": [...]}.
+  PORT   the server's port (default 5260)
+  HOST   the server's address (default 127.0.0.1)
+  TOKEN  the server's token (default: $WORKCELL_TOKEN, else the token file a local
+         workcell serve writes; see docs/protocol.md, "Security")
+Start a server first, e.g.: workcell serve --port 5260`;
+
+const args = process.argv.slice(2);
+if (args.includes("-h") || args.includes("--help")) {
+  console.log(USAGE);
+  process.exit(0);
+}
+const port = Number(args[0] || 5260);
+if (!Number.isInteger(port) || port < 1 || port > 65535) {
+  console.error(`not a port number: ${JSON.stringify(args[0])} (1..65535)\n\n${USAGE}`);
+  process.exit(2);
+}
+const host = args[1] || "127.0.0.1";
+const token = args[2] || process.env.WORKCELL_TOKEN || localToken(port, host);
 
 // The token file `workcell serve` writes (docs/protocol.md, "Security").
 function localToken(port, host) {

@@ -26,8 +26,15 @@ from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = ROOT / "notebooks"
-NAMES = ("quickstart", "modeller", "kinematics", "thesis_examples", "study")
-PICTURES = {"quickstart": 4, "modeller": 1, "kinematics": 2, "thesis_examples": 3, "study": 2}
+NAMES = ("quickstart", "build_your_own_cell", "modeller", "kinematics", "thesis_examples", "study")
+PICTURES = {
+    "quickstart": 4,
+    "build_your_own_cell": 2,
+    "modeller": 1,
+    "kinematics": 2,
+    "thesis_examples": 3,
+    "study": 2,
+}
 FLOAT = r"(-?\d+(?:\.\d*)?(?:e[-+]?\d+)?)"
 
 
@@ -86,8 +93,31 @@ def check_quickstart(out: str) -> None:
     assert _number(out, "bored cube volume:") == pytest.approx(a**3 - _gon(n, r) * a, rel=1e-12)
     assert "grasped: part" in out
     assert "released: part" in out
-    # placed centred on the 100 mm stage at (0.25, 0.25), top 0.4 + 0.08 m: corner frame
-    assert _vector(out, "part frame at (m):") == pytest.approx([0.23, 0.23, 0.48], abs=1e-9)
+    # placed centred on the 100 mm stage at (0.25, 0.25), top 0.4 + 0.08 m: its centroid
+    # half the 40 mm cube above, its frame (a corner) half the cube below and beside that
+    assert _vector(out, "part centroid at (m):") == pytest.approx([0.25, 0.25, 0.50], abs=1e-9)
+    assert _vector(out, "part frame (a corner) at (m):") == pytest.approx(
+        [0.23, 0.23, 0.48], abs=1e-9
+    )
+
+
+def check_build_your_own_cell(out: str) -> None:
+    sheet, side, height = 0.006, 0.15, 0.06  # the bin's walls, side, height (m)
+    boxes = side * side * sheet + 4 * sheet * side * height  # its five boxes, summed
+    assert _number(out, "bin volume:") == pytest.approx(boxes, rel=1e-12)
+    assert _number(out, "part mass:") == pytest.approx(0.04**3 * 2700 * 1e3, rel=1e-12)  # g
+    assert "grasped: part" in out
+    assert "released: part" in out
+    assert _number(out, "collisions:") == 0
+    # dropped at the bin's centre (corner 0.17, 0.15 + half its side), 20 mm above its
+    # floor (table top 0.4 m + the 6 mm sheet)
+    drop = [0.17 + side / 2, 0.15 + side / 2, 0.4 + sheet + 0.02]
+    assert _vector(out, "part centroid at (m):") == pytest.approx(drop, abs=1e-9)
+    cycle = _number(out, "cycle time:")
+    assert _number(out, "eq. 4.27 over the joint path:") == pytest.approx(cycle, abs=1e-4)
+    assert _number(out, "script cycle time:") == pytest.approx(cycle, abs=1e-4)  # the .wcl
+    assert 15 < cycle < 30
+    assert len(re.findall(r"^\d+ key frames -> ", out, re.M)) == 1
 
 
 def check_modeller(out: str) -> None:
@@ -160,8 +190,8 @@ def check_thesis_examples(out: str) -> None:
     assert "grasp 'sphere'" in out
     assert "now carried by 'puma_2'" in out
     assert out.count(" 0 collisions") == 2
-    # cube (40 mm, frame at a corner) centred on stage 1 at (0.24, 0.22), top 0.5 m
-    assert _vector(out, "final cube frame (m):") == pytest.approx([0.22, 0.20, 0.5], abs=1e-6)
+    # cube (40 mm) centred on stage 1 at (0.24, 0.22), top 0.5 m: its centroid 20 mm above
+    assert _vector(out, "final cube centroid (m):") == pytest.approx([0.24, 0.22, 0.52], abs=1e-6)
     # sphere (25 mm radius) on table 2 (top 0.4 m) at (0.62, 0.15)
     assert _vector(out, "final sphere centre (m):") == pytest.approx([0.62, 0.15, 0.425], abs=1e-6)
     assert len(re.findall(r"^\d+ key frames -> ", out, re.M)) == 3
@@ -189,6 +219,7 @@ def check_study(out: str) -> None:
 
 CHECKS = {
     "quickstart": check_quickstart,
+    "build_your_own_cell": check_build_your_own_cell,
     "modeller": check_modeller,
     "kinematics": check_kinematics,
     "thesis_examples": check_thesis_examples,

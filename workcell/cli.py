@@ -11,7 +11,7 @@ from pathlib import Path
 
 from workcell.examples import CELL_HELP, CELLS
 
-__all__ = ["SUBCOMMAND_MODULES", "check_outputs", "main", "run_command"]
+__all__ = ["SUBCOMMAND_MODULES", "add_record_fps", "check_outputs", "main", "run_command"]
 
 # Modules that add their own subcommands: each has ``register(sub)``, which adds its
 # parsers to the ``argparse`` subparsers ``sub`` and sets ``func`` (args -> exit code).
@@ -83,8 +83,8 @@ def _demo_solids(args: argparse.Namespace) -> int:
             f"\nunit cube: one surface 'square1' pointed to {sq.pointed_by} times "
             f"(cube1 x6, para_block x6 by instancing)"
         )
-        where = f"saved to {out}" if out else "written as JSON (in memory; --save FILE keeps it)"
-        print(f"model {where}; load gives an identical model: {same}")
+        where = f"saved to {out}" if out else "saved as JSON in memory (--save FILE writes it)"
+        print(f"model {where}; loading it gives an identical model: {same}")
         print(f"built, meshed and measured in {elapsed:.2f} s")
     return 0 if same and all(r.valid for r in rows) else 1
 
@@ -93,6 +93,7 @@ TITLES = {
     "joints": "the thesis's example 1 (ch. 5): one Puma 260 moved in joint space",
     "pick-place": "the thesis's example 2 (ch. 5): pick and place with one Puma 260",
     "handoff": "the thesis's example 3 (ch. 5): two Puma 260s hand a sphere over",
+    "obstacle": "beyond the thesis: a wall between two stages, direct against pick/place",
 }
 
 
@@ -116,10 +117,15 @@ def _demo_cell(args: argparse.Namespace) -> int:
         from workcell.record import record
 
         stats = record(
-            result, args.save, progress=None if args.json else True, images_fps=args.images
+            result,
+            args.save,
+            progress=None if args.json else True,
+            images_fps=args.images,
+            fps=args.record_fps or None,
         )
         out["rrd"] = str(stats.path)
         out["rrd_bytes"] = stats.bytes
+        out["rrd_frames"] = stats.frames
     if args.render:
         from workcell.record import contact_sheet
 
@@ -144,10 +150,14 @@ def _demo_cell(args: argparse.Namespace) -> int:
         f"\nsimulated time {out['sim_time_s']:.2f} s; {out['frames']} frames at dt = {args.dt:g} s; "
         f"{out['collisions']} collision(s)"
     )
+    if args.mode == "joint-by-joint" and not args.physics:
+        from workcell.program.format import joint_by_joint_clocks
+
+        print(joint_by_joint_clocks(out["sim_time_s"], out["frames"], args.dt))
     if args.example == "joints":
         print("(eq. 4.27: 170 deg / 0.3 rad/s = 9.89 s)")
     for name, pos in out["objects"].items():
-        print(f"{name} ends at ({', '.join(f'{v:.4f}' for v in pos)}) m")
+        print(f"{name}'s centroid ends at ({', '.join(f'{v:.4f}' for v in pos)}) m")
     phys = out.get("physics")
     if phys:
         for robot, t in phys["tracking"].items():
@@ -171,7 +181,10 @@ def _demo_cell(args: argparse.Namespace) -> int:
         )
     if out.get("rrd"):
         mb = (out.get("rrd_bytes") or 0) / 1e6
-        print(f"recording written to {out['rrd']} ({mb:.1f} MB; open it with: rerun {out['rrd']})")
+        print(
+            f"recording written to {out['rrd']} ({mb:.1f} MB, {out['rrd_frames']} of "
+            f"{out['frames']} frames; open it with: rerun {out['rrd']})"
+        )
     if out.get("png"):
         print(f"picture written to {out['png']}")
     return 0
@@ -186,6 +199,21 @@ def _demo(args: argparse.Namespace) -> int:
         from workcell.errors import ProgramError
 
         raise ProgramError(f"--dt must be > 0 s, got {args.dt}")
+    if args.example == "obstacle":
+        from workcell.examples.obstacle import demo
+
+        if args.physics:
+            from workcell.errors import ProgramError
+
+            raise ProgramError("demo obstacle has no --physics run; try demo pick-place --physics")
+        return demo(
+            args.mode,
+            args.dt,
+            render=args.render,
+            as_json=args.json,
+            save=args.save,
+            mjcf=args.mjcf,
+        )
     return _demo_cell(args)
 
 
@@ -205,9 +233,23 @@ def _export_cell(args: argparse.Namespace) -> int:
 
     cell = load_cell(args.cell)
     cell.save(args.out)
-    print(f"wrote {args.out} (cell '{cell.name}': {len(cell.robots)} robot(s), "
-          f"{len(cell.static_parts)} static and {len(cell.movable_parts)} movable part(s))")
+    print(
+        f"wrote {args.out} (cell '{cell.name}': {len(cell.robots)} robot(s), "
+        f"{len(cell.static_parts)} static and {len(cell.movable_parts)} movable part(s))"
+    )
     return 0
+
+
+def add_record_fps(parser: argparse.ArgumentParser) -> None:
+    """The ``--record-fps`` option of the commands that record (``--save``)."""
+    parser.add_argument(
+        "--record-fps",
+        type=float,
+        default=60.0,
+        metavar="HZ",
+        help="with --save: frames per simulated second in the recording (default 60; every "
+        "event keeps its exact frame; 0: every frame of the timeline)",
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -233,13 +275,17 @@ def main(argv: list[str] | None = None) -> int:
         "example",
         choices=["solids", *CELLS],
         help="solids: the thesis's example solids (ch. 2-3); joints, pick-place, handoff: "
-        "its three example workcells (ch. 5)",
+        "its three example workcells (ch. 5); obstacle: a wall between two stages, the "
+        "direct program against pick/place",
     )
     demo.add_argument(
         "--mode",
         choices=["path", "joint-by-joint", "playback"],
         default="path",
-        help="simulation mode (thesis 4.4; default path)",
+        help="simulation mode (thesis 4.4; default path). In joint-by-joint mode the joints "
+        "move one after another, a frame every dt, but the simulated time is the thesis's "
+        "clock: each move lasts its largest joint motion / speed, as in path mode, so "
+        "frames x dt is longer than the simulated time (both are printed)",
     )
     demo.add_argument("--dt", type=float, metavar="SECONDS", help="sampling interval (0.01)")
     demo.add_argument("--mjcf", metavar="DIR", help="also export the cell as MJCF to DIR")
@@ -251,6 +297,7 @@ def main(argv: list[str] | None = None) -> int:
         metavar="FILE",
         help="solids: save the model (JSON) to FILE; cells: record the run to FILE.rrd",
     )
+    add_record_fps(demo)
     demo.add_argument(
         "--images",
         type=float,

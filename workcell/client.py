@@ -1,8 +1,10 @@
 """The Python client of the remote program interface (``workcell serve``, protocol v1).
 
-A :class:`Client` has the Simulator's method names (``set_speed``, ``move_joints_absolute``,
-``move_end_effector``, ``close_gripper``, ``joints``, ``tool_pose``, ``summary``, the
-properties ``robots``, ``frames``, ``sim_time``, ``events`` ...) with the same arguments
+A :class:`Client` has every public method of the Simulator (``set_speed``,
+``move_joints_absolute``, ``move_end_effector``, ``close_gripper``, ``joints``,
+``tool_pose``, ``part_pose``, ``trajectory``, ``summary``, ``concurrently()``, the
+properties ``robots``, ``frames``, ``sim_time``, ``wall_time``, ``events`` ...; a test
+compares the two) with the same arguments
 in SI units (rad, m, s; numpy arrays are sent as lists and joint vectors and poses come
 back as arrays), so one program runs unchanged in-process or remote::
 
@@ -29,6 +31,8 @@ import json
 import math
 import os
 import socket
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
 from typing import Any
 
 import numpy as np
@@ -43,6 +47,7 @@ from workcell.program.protocol import (
     VERSION,
     encode,
     error_class,
+    to_jsonable,
 )
 from workcell.sim.timeline import Event
 
@@ -53,8 +58,11 @@ _KEEPS_CELL = frozenset(
     {
         "cell_data", "set_speed", "set_mode", "move_joints_absolute", "move_joints_relative",
         "move_end_effector", "move_straight_line", "close_gripper", "open_gripper", "wait",
+        "move_linear", "move_circular", "set_override", "set_profile", "cycle_time",
+        "pick", "place", "handover", "set_planning",
         "play", "joints", "tool_pose", "held", "clearance", "summary", "part_positions",
-        "robots", "frames", "sim_time", "events", "hello",
+        "robots", "frames", "sim_time", "events", "hello", "part_pose", "gripper_pose",
+        "speed", "trajectory", "wall_time", "concurrently_begin", "concurrently_end",
     }
 )  # fmt: skip
 
@@ -182,21 +190,78 @@ class Client:
         """Switch mode: "path", "joint-by-joint" or "playback"."""
         self.call("set_mode", mode=mode)
 
-    def move_joints_absolute(self, robot: str, q: ArrayLike) -> None:
-        """Move the joints to ``q`` (rad/m)."""
-        self.call("move_joints_absolute", robot=robot, q=_list(q))
+    def move_joints_absolute(
+        self, robot: str, q: ArrayLike | str, *, zone: float = 0.0, plan: bool = False
+    ) -> None:
+        """Move the joints to ``q`` (rad/m), or to a named pose of the robot ("home");
+        ``zone`` (m): blend into the next move; ``plan``: along a collision-free path."""
+        self.call("move_joints_absolute", robot=robot, q=_list(q), zone=zone, plan=plan)
 
-    def move_joints_relative(self, robot: str, dq: ArrayLike) -> None:
-        """Move the joints by ``dq`` (rad/m)."""
-        self.call("move_joints_relative", robot=robot, dq=_list(dq))
+    def move_joints_relative(self, robot: str, dq: ArrayLike, *, zone: float = 0.0) -> None:
+        """Move the joints by ``dq`` (rad/m); ``zone`` (m): blend into the next move."""
+        self.call("move_joints_relative", robot=robot, dq=_list(dq), zone=zone)
 
-    def move_end_effector(self, robot: str, T: ArrayLike, config: str | None = None) -> None:
-        """Move the tool to world pose ``T`` (4x4, m)."""
-        self.call("move_end_effector", robot=robot, T=_list(T), config=config)
+    def move_end_effector(
+        self,
+        robot: str,
+        T: ArrayLike,
+        config: str | None = None,
+        *,
+        zone: float = 0.0,
+        plan: bool = False,
+    ) -> None:
+        """Move the tool to world pose ``T`` (4x4, m); ``zone`` (m): blend into the next
+        move; ``plan``: along a collision-free path."""
+        self.call("move_end_effector", robot=robot, T=_list(T), config=config, zone=zone, plan=plan)
 
     def move_straight_line(self, robot: str, T: ArrayLike, step: float = 0.005) -> None:
         """Move the tool along a straight line to ``T`` (4x4), samples ``step`` (m) apart."""
         self.call("move_straight_line", robot=robot, T=_list(T), step=step)
+
+    def move_linear(
+        self,
+        robot: str,
+        T: ArrayLike,
+        *,
+        speed: float,
+        acceleration: float | None = None,
+        zone: float = 0.0,
+    ) -> None:
+        """Move the tool point along a line to ``T`` (4x4) at ``speed`` (m/s),
+        ``acceleration`` (m/s^2, default 1.2); ``zone`` (m): blend into the next move."""
+        self.call(
+            "move_linear", robot=robot, T=_list(T), speed=speed,
+            acceleration=acceleration, zone=zone,
+        )  # fmt: skip
+
+    def move_circular(
+        self,
+        robot: str,
+        via: ArrayLike,
+        T: ArrayLike,
+        *,
+        speed: float,
+        acceleration: float | None = None,
+        zone: float = 0.0,
+    ) -> None:
+        """Move the tool point along the arc through ``via`` (a point (3,) or a pose) to
+        ``T`` (4x4) at ``speed`` (m/s)."""
+        self.call(
+            "move_circular", robot=robot, via=_list(via), T=_list(T), speed=speed,
+            acceleration=acceleration, zone=zone,
+        )  # fmt: skip
+
+    def set_override(self, robot: str, override: float) -> None:
+        """Set the robot's speed override, 0 < f <= 1."""
+        self.call("set_override", robot=robot, override=override)
+
+    def set_profile(self, profile: str, acceleration: float | None = None) -> None:
+        """Set the joint-move profile: linear, trapezoid, quintic or jerk."""
+        self.call("set_profile", profile=profile, acceleration=acceleration)
+
+    def cycle_time(self) -> dict[str, Any]:
+        """The cycle-time report: ``total_s`` and the records of ``commands``."""
+        return self.call("cycle_time")
 
     def close_gripper(
         self, robot: str, max_distance: float = 0.02, max_angle: float = math.radians(10)
@@ -206,9 +271,47 @@ class Client:
             "close_gripper", robot=robot, max_distance=max_distance, max_angle=max_angle
         )
 
-    def open_gripper(self, robot: str) -> str | None:
-        """Release the part held (its name, or None)."""
-        return self.call("open_gripper", robot=robot)
+    def open_gripper(self, robot: str, *, settle: bool = False) -> str | None:
+        """Release the part held (its name, or None); ``settle``: drop it onto its support."""
+        return self.call("open_gripper", robot=robot, settle=settle)
+
+    def set_planning(
+        self,
+        *,
+        clearance: float | None = None,
+        time_limit: float | None = None,
+        seed: int | None = None,
+        near_clearance: float | None = None,
+    ) -> dict[str, float]:
+        """Change how planned moves search (m, s, seed); the settings in force."""
+        return self.call(
+            "set_planning",
+            clearance=clearance,
+            time_limit=time_limit,
+            seed=seed,
+            near_clearance=near_clearance,
+        )
+
+    def pick(self, robot: str, part: str, *, approach: float = 0.08) -> str:
+        """Grasp ``part`` (grasp, configuration and collision-free path chosen by the server)."""
+        return self.call("pick", robot=robot, part=part, approach=approach)
+
+    def place(
+        self,
+        robot: str,
+        part: str,
+        *,
+        on: str,
+        position: ArrayLike | None = None,
+        approach: float = 0.08,
+    ) -> None:
+        """Put the held ``part`` down resting on ``on``, centroid over ``position`` (x, y m)."""
+        pos = None if position is None else _list(np.asarray(position, dtype=np.float64)[:2])
+        self.call("place", robot=robot, part=part, on=on, position=pos, approach=approach)
+
+    def handover(self, giver: str, receiver: str, part: str, *, approach: float = 0.08) -> None:
+        """Hand ``part`` from ``giver`` to ``receiver`` at a meeting pose the server finds."""
+        self.call("handover", giver=giver, receiver=receiver, part=part, approach=approach)
 
     def wait(self, seconds: float) -> None:
         """Let ``seconds`` of simulated time pass."""
@@ -238,8 +341,40 @@ class Client:
         """sim_time_s, wall_time_s, frames, events, collisions, objects, mjcf."""
         return self.call("summary")
 
+    def part_pose(self, part: str) -> NDArray[np.float64]:
+        """A movable part's frame in the world (4x4, m)."""
+        return np.array(self.call("part_pose", part=part), dtype=np.float64)
+
+    def gripper_pose(self, robot: str) -> NDArray[np.float64]:
+        """The robot's gripper body in the world (4x4, m)."""
+        return np.array(self.call("gripper_pose", robot=robot), dtype=np.float64)
+
+    def speed(self, robot: str) -> float:
+        """The robot's speed (rad/s): the speed of the joint that moves most."""
+        return float(self.call("speed", robot=robot))
+
+    def trajectory(self, robot: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(simulated times (N,) s, joint values (N, dof) rad/m) of every frame for one
+        robot (a long run may exceed the protocol's message bound)."""
+        r = self.call("trajectory", robot=robot)
+        t = np.array(r["t"], dtype=np.float64)
+        return t, np.array(r["q"], dtype=np.float64).reshape(len(t), -1)
+
+    @contextmanager
+    def concurrently(self) -> Iterator[None]:
+        """The robots' motion commands inside the block run at the same time (the
+        Simulator's ``concurrently()``); an error inside the block drops the whole block."""
+        self.call("concurrently_begin")
+        try:
+            yield
+        except BaseException:
+            with suppress(WorkcellError):  # the server drops the block (or has lost it)
+                self.call("concurrently_end", commit=False)
+            raise
+        self.call("concurrently_end", commit=True)
+
     def part_positions(self) -> dict[str, list[float]]:
-        """World position (m) of each movable part."""
+        """World position (m) of each movable part's centroid."""
         return self.call("part_positions")
 
     @property
@@ -256,6 +391,11 @@ class Client:
     def sim_time(self) -> float:
         """The simulated clock (s)."""
         return float(self.call("sim_time"))
+
+    @property
+    def wall_time(self) -> float:
+        """The server simulator's wall clock (s): time spent on commands and replays."""
+        return float(self.call("wall_time"))
 
     @property
     def events(self) -> tuple[Event, ...]:
@@ -292,7 +432,11 @@ def _local_token(host: str, port: int) -> str | None:
 
 
 def _list(v: Any) -> Any:
-    """A vector or matrix as nested lists; a target object (dict) as it is."""
-    if isinstance(v, dict):
+    """A vector or matrix as nested lists; a target object (dict) or a name as it is; what
+    is not numbers is sent as it is, for the server to refuse with a ProgramError."""
+    if isinstance(v, (dict, str)):
         return v
-    return np.asarray(v, dtype=np.float64).tolist()
+    try:
+        return np.asarray(v, dtype=np.float64).tolist()
+    except (TypeError, ValueError):
+        return to_jsonable(v)

@@ -14,6 +14,7 @@ __all__ = [
     "KinematicsError",
     "LimitError",
     "ModelError",
+    "PlanningError",
     "ProgramError",
     "ProtocolError",
     "RecordError",
@@ -54,6 +55,11 @@ class GraspError(WorkcellError):
 
 class CollisionError(WorkcellError):
     """A collision occurred while the program was set to stop on collisions."""
+
+
+class PlanningError(WorkcellError):
+    """No collision-free motion was found: the start or goal is in collision (the pair is
+    named), the goal cannot be reached, or the planner's time limit ran out."""
 
 
 class ProgramError(WorkcellError):

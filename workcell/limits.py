@@ -44,7 +44,16 @@ from dataclasses import dataclass, field
 
 from workcell.errors import LimitError
 
-__all__ = ["DEFAULTS", "MAX_SIM_TIME", "Limits", "check", "current", "parse_limit", "set_limits", "using"]
+__all__ = [
+    "DEFAULTS",
+    "MAX_SIM_TIME",
+    "Limits",
+    "check",
+    "current",
+    "parse_limit",
+    "set_limits",
+    "using",
+]
 
 
 MAX_SIM_TIME = 9.2e9  # s: int64 nanoseconds (rerun's time type) end at 9.22e9 s

@@ -38,11 +38,14 @@ def test_a_position_servo_per_arm_joint_and_finger(compiled):
     for a in range(m.nu):
         j = m.actuator_trnid[a, 0]
         assert m.joint(j).name == names[a]  # each drives the joint of its name
-        np.testing.assert_array_equal(m.actuator_ctrlrange[a], m.jnt_range[j])
+        kp, kv = m.actuator_gainprm[a, 0], -m.actuator_biasprm[a, 2]
+        q0 = m.qpos0[m.jnt_qposadr[j]]  # the joint's initial value
+        # force = kp (ctrl + q0 - q) - kv qdot: ctrl is the offset from the initial value
+        assert m.actuator_biasprm[a, 1] == -kp
+        assert m.actuator_biasprm[a, 0] == pytest.approx(kp * q0, rel=1e-12, abs=1e-12)
+        np.testing.assert_allclose(m.actuator_ctrlrange[a], m.jnt_range[j] - q0, atol=1e-12)
         assert m.actuator_ctrllimited[a]
         assert not m.actuator_forcelimited[a]
-        kp, kv = m.actuator_gainprm[a, 0], -m.actuator_biasprm[a, 2]
-        assert m.actuator_biasprm[a, 1] == -kp  # force = kp (ctrl - q) - kv qdot
         assert kp > 0
         assert kv > 0
 
@@ -128,3 +131,41 @@ def test_exported_cell_plays_in_dm_control(compiled, tmp_path):
     nu, drift = res.stdout.split()
     assert int(nu) == cc.model.nu
     assert float(drift) < 1e-6  # the arms (after the two free joints) hold their pose
+
+
+_HOLD = """
+import sys, mujoco, numpy as np
+m = mujoco.MjModel.from_xml_path(sys.argv[1])
+d = mujoco.MjData(m)  # fresh: ctrl 0, no keyframe loaded
+mujoco.mj_forward(m, d)
+x0, s0 = d.xpos.copy(), d.site_xpos.copy()
+while d.time < 5.0:
+    mujoco.mj_step(m, d)
+drift = np.linalg.norm(d.xpos - x0, axis=1)
+for b in range(1, m.nbody):
+    print(m.body(b).name, drift[b])
+print("sites", np.linalg.norm(d.site_xpos - s0, axis=1).max())
+"""
+
+
+@pytest.mark.slow
+def test_a_freshly_loaded_export_holds_its_initial_pose_for_5_s(compiled, tmp_path):
+    """Stepped from a new MjData (ctrl 0, as MuJoCo's viewer starts), every robot body and
+    tool site of the exported file stays within 1 mm of its initial pose for 5 s (no arm
+    swings to q = 0), and a cube resting on a table stays too (the two-Puma cell's cube
+    floats in the air and falls, as it should)."""
+    from workcell.examples import thesis_pick_place as pp
+
+    cell, _ = compiled
+    for c, still in ((cell, ("puma_1.", "puma_2.", "sites")), (pp.build(), ("puma.", "cube"))):
+        path = export_cell(c, tmp_path / c.name)
+        assert "holds the initial pose" in path.read_text().split("\n")[1]  # the comment
+        res = subprocess.run(
+            [sys.executable, "-c", _HOLD, str(path)], cwd="/", capture_output=True, text=True
+        )
+        assert res.returncode == 0, res.stderr
+        drift = {k: float(v) for k, v in (line.split() for line in res.stdout.splitlines())}
+        held = {b: d for b, d in drift.items() if b.startswith(still)}
+        assert len(held) > 10
+        for body, d in held.items():
+            assert d < 1e-3, (c.name, body, d)

@@ -53,4 +53,3 @@ def snapshot(session: Session) -> tuple:
 def session(tmp_path) -> Session:
     """An empty session whose relative files go to a temporary folder."""
     return Session(base_dir=tmp_path)
-

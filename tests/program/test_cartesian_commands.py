@@ -63,7 +63,8 @@ def test_grasp_carry_and_release_through_commands(pick):
     pick.execute(simc.MoveStraightLine("puma", above))
     # carried: the cube's centroid rose with the tool by 0.1 m
     pos = pick.execute(simc.PartPositions())["cube"]
-    assert np.allclose(pos, np.add(ex.CUBE_CORNER, (0, 0, 0.1)), atol=1e-6)
+    centroid = np.add(ex.CUBE_CORNER, ex.CUBE_SIZE / 2)
+    assert np.allclose(pos, np.add(centroid, (0, 0, 0.1)), atol=1e-6)
     before = snapshot(pick)
     with pytest.raises(GraspError):
         pick.execute(simc.CloseGripper("puma"))  # already holds it

@@ -121,7 +121,7 @@ def test_keywords_by_unambiguous_prefix_any_case_and_the_simulators_method_names
     assert one("modify cube1 movable no") == cmd.SetMovable("cube1", False)
     assert one("cell example pick") == cellc.ExampleCell("pick-place")
     assert one("help move joints") == Meta("help", ("move", "joints"))
-    assert parse_line("") == parse_line("   # nothing") == []
+    assert list(parse_line("")) == list(parse_line("   # nothing")) == []
 
 
 def test_every_commands_help_example_parses_to_a_command():
@@ -131,7 +131,7 @@ def test_every_commands_help_example_parses_to_a_command():
             continue
         assert leaf.summary, path
         assert leaf.example, path
-        assert path[0] == leaf.example.split()[0] or path[0] in ("help", "quit"), path
+        assert path[0] == leaf.example.split()[0] or path[0] in ("help", "quit", "exit"), path
         (_c,) = parse_line(leaf.example)
         count += 1
     assert count >= 60
@@ -170,17 +170,35 @@ def test_with_a_session_names_are_checked_where_they_are_typed():
     s.execute(sol.CreateCube("cube1", 1.0))
     s.execute(cellc.ExampleCell("joints"))  # the cell's model replaces the empty one
     with pytest.raises(CommandSyntaxError) as e:
-        parse_line("move joints absolute pume 0 0 0 0 0 0", s)
+        list(parse_line("move joints absolute pume 0 0 0 0 0 0", s))
     assert (e.value.column, e.value.expected) == (22, ["puma"])
     assert "unknown robot 'pume'" in str(e.value)
     s2 = Session()
     s2.execute(sol.CreateCube("cube1", 1.0))
     with pytest.raises(CommandSyntaxError, match="unknown entity 'cub'") as e:
-        parse_line("properties cub", s2)
+        list(parse_line("properties cub", s2))
     assert "cube1" in e.value.expected
     with pytest.raises(CommandSyntaxError, match="unknown relation 'ts9'"):
-        parse_line("detach cube1 ts9", s2)
-    assert parse_line("detach cube1 ts6", s2) == [cmd.Detach("cube1", "ts6")]
+        list(parse_line("detach cube1 ts9", s2))
+    assert list(parse_line("detach cube1 ts6", s2)) == [cmd.Detach("cube1", "ts6")]
+
+
+def test_on_a_line_each_command_is_checked_when_it_runs():
+    """Names made by the commands before it on a ';' line are known (docs/program.md's
+    Python example); a syntax error anywhere on the line still stops it before anything runs."""
+    s = Session()
+    results = [s.execute(c) for c in parse_line("create cube c1 size 40 mm; properties c1", s)]
+    assert results[0] == "c1"
+    assert results[1]["volume"] == pytest.approx(0.04**3, rel=1e-12)
+    s2 = Session()
+    with pytest.raises(CommandSyntaxError, match="column 28"):
+        parse_line("create cube c1 size 40 mm; propertys c1", s2)
+    assert s2.model.list("block") == []  # nothing ran
+    commands = parse_line("create cube c1 size 40 mm; properties c2", s2)
+    s2.execute(next(commands))
+    with pytest.raises(CommandSyntaxError, match="unknown entity 'c2'"):
+        next(commands)
+    assert s2.model.list("block") == ["c1"]  # the first command ran, the second was refused
 
 
 def test_completion_offers_keywords_names_and_relations():

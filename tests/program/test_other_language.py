@@ -50,3 +50,20 @@ def test_the_node_client_sends_the_token_and_ends_on_an_error():
         assert json.loads(r.stdout)["sim_time_s"] == pytest.approx(EXAMPLE1_SIM_TIME, abs=1e-9)
     finally:
         srv.stop()
+
+
+@pytest.mark.parametrize("flag", ["--help", "-h"])
+def test_the_node_client_prints_its_usage(flag):
+    r = node(flag)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("Usage: node scripts/example1_client.js [PORT] [HOST] [TOKEN]")
+    assert "workcell serve" in r.stdout
+    assert r.stderr == ""
+
+
+def test_the_node_client_refuses_a_port_that_is_not_a_number():
+    r = node("five")
+    assert r.returncode == 2
+    assert r.stderr.startswith('not a port number: "five"')
+    assert "Usage:" in r.stderr
+    assert "RangeError" not in r.stderr

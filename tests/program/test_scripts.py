@@ -73,9 +73,9 @@ def test_the_example_2_script_puts_the_cube_on_stage_1():
 
     s, _ = quiet(ASSETS / "thesis_example2.wcl")
     sim = s.sim
-    # the cube's corner (its part frame) where its centroid sits on stage 1's top centre
+    # the cube's centroid half its size above stage 1's top centre
     half = ex.CUBE_SIZE / 2
-    expected = np.array([*ex.STAGE_1_CENTRE, ex.STAGE_1_TOP]) - [half, half, 0.0]
+    expected = np.array([*ex.STAGE_1_CENTRE, ex.STAGE_1_TOP + half])
     assert np.allclose(sim.part_positions()["cube"], expected, atol=1e-6)
     kinds = [e.kind for e in sim.events]
     assert kinds.count("grasp") == 1

@@ -83,7 +83,7 @@ def test_hello_says_protocol_version_and_bound(server):
     assert raw.ask({"id": "a", "command": "hello", "args": {"version": 1}})["id"] == "a"
     r = raw.ask({"id": 7, "command": "commands"})
     mja = next(c for c in r["result"] if c["name"] == "move_joints_absolute")
-    assert [a["name"] for a in mja["args"]] == ["robot", "q"]
+    assert [a["name"] for a in mja["args"]] == ["robot", "q", "plan", "zone"]
     assert raw.ask({"id": 8, "command": "bye"}) == {"id": 8, "result": None}
     assert raw.r.readline() == b""  # closed after bye
     raw.close()
@@ -119,7 +119,7 @@ def test_an_error_reply_raises_the_matching_error_and_both_go_on(server):
             c.call("create_cube", "a", 1.0)
         with pytest.raises(ProgramError, match="unknown command 'fly'"):
             c.call("fly")
-        with pytest.raises(ProgramError, match="q must be a list of numbers"):
+        with pytest.raises(ProgramError, match="no pose 'up'; named poses: home, zero"):
             c.call("move_joints_absolute", robot="puma", q="up")
         with pytest.raises(ProgramError, match="missing argument"):
             c.call("set_speed", robot="puma")

@@ -162,3 +162,77 @@ def test_read_back_is_in_degrees_and_metres_and_can_be_typed_in_again():
     assert np.allclose(pos, T[:3, 3], atol=1e-6)
     R = spatial.srt(rotation=np.radians(rpy))[:3, :3]  # the language's rpy
     assert np.allclose(R, T[:3, :3], atol=1e-5)
+
+
+def test_exit_leaves_like_quit():
+    s = Session()
+    rc, _, err = shell("create cube a size 1\nexit\ncreate cube b size 1\n", s)
+    assert (rc, err) == (0, "")
+    assert s.model.exists("a")
+    assert not s.model.exists("b")
+
+
+def test_clear_is_its_own_command_not_a_prefix_of_clearance(tmp_path):
+    """'clear' clears a terminal's screen (and nothing in a pipe); 'clea' is ambiguous."""
+    from prompt_toolkit.application import create_app_session
+    from prompt_toolkit.data_structures import Size
+    from prompt_toolkit.input import create_pipe_input
+    from prompt_toolkit.output.vt100 import Vt100_Output
+
+    rc, out, err = shell("clear\n")
+    assert (rc, out, err) == (0, "", "")
+    rc, _, err = shell("clea\n")
+    assert rc == 1
+    assert "'clea' is ambiguous" in err
+    assert "clear" in err
+    assert "clearance" in err
+    screen = io.StringIO()
+    terminal = Vt100_Output(screen, lambda: Size(rows=24, columns=80), term="xterm")
+    with create_pipe_input() as inp:
+        inp.send_text("clear\nexit\n")
+        inp.close()
+        with create_app_session(input=inp, output=terminal):
+            rc = run_shell(
+                Session(),
+                stdout=io.StringIO(),
+                stderr=io.StringIO(),
+                history=tmp_path / "h",
+                interactive=True,
+            )
+    assert rc == 0
+    assert "\x1b[2J" in screen.getvalue()  # the VT100 erase-screen sequence
+
+
+def test_names_made_earlier_on_a_line_are_known_to_the_commands_after_them():
+    s = Session()
+    rc, out, err = shell("create cube c1 size 40 mm; properties c1\n", s)
+    assert (rc, err) == (0, "")
+    assert "volume 6.4e-05 m^3" in out
+
+
+def test_errors_quote_values_in_the_units_people_type():
+    """The shell's user types degrees and millimetres: a refused value comes back in them."""
+    s = Session()
+    lines = [
+        "cell example pick-place",
+        "simulate",
+        "speed puma 600",  # deg/s, over the fastest joint's 577 deg/s
+        "close gripper puma angle -5",
+        "move straight puma offset 0 0 -0.05 step -2 mm",
+        "move joints absolute puma 0 0 -90 0 90",
+        "simulate stop",
+        "add robot r2 puma260 q 90 0",
+    ]
+    rc, _, err = shell("\n".join(lines) + "\n", s)
+    assert rc == 1
+    errors = err.splitlines()
+    assert len(errors) == 5, err
+    assert "got 600 deg/s" in errors[0]
+    assert "577 deg/s" in errors[0]
+    assert "got -5 deg" in errors[1]
+    assert "got -2 mm" in errors[2]
+    assert "rad" not in errors[3]
+    assert "1.57" not in errors[4]  # not the 90 deg typed, in radians
+    assert "got 2 value(s)" in errors[4]
+    for e in errors:  # never a bare radian value
+        assert "rad" not in e or "deg" in e, e

@@ -4,6 +4,7 @@ MuJoCo kinematics computed here, on the timeline's own qpos."""
 from __future__ import annotations
 
 import copy
+import math
 import socket
 from collections import defaultdict
 from pathlib import Path
@@ -81,7 +82,7 @@ def joints_rec(tmp_path_factory: pytest.TempPathFactory) -> tuple[Simulator, Pat
     sim = thesis_joints.run("path", 0.01)
     path = tmp_path_factory.mktemp("rec") / "joints.rrd"
     rr.set_strict_mode(True)
-    record(sim, path)
+    record(sim, path, fps=None)  # every frame
     return sim, path
 
 
@@ -90,7 +91,7 @@ def cell_rec(tmp_path_factory: pytest.TempPathFactory) -> tuple[Simulator, Path]
     sim = run_cell()
     path = tmp_path_factory.mktemp("rec") / "cell.rrd"
     rr.set_strict_mode(True)
-    record(sim, path, chunk_frames=64)  # several batches
+    record(sim, path, chunk_frames=64, fps=None)  # several batches, every frame
     return sim, path
 
 
@@ -149,6 +150,7 @@ def test_entity_paths(cell_rec: tuple[Simulator, Path]) -> None:
     m = sim.model
     body = [m.body(b).name for b in range(m.nbody)]
     expected = {"/world", "/events", "/joints/arm", "/joints/plain", "/gripper/arm"}
+    expected |= {f"/joint_{k}/{r}" for k in ("speeds", "accelerations") for r in ("arm", "plain")}
     expected |= {"/world/tool_paths/arm", "/world/tool_paths/plain"}
     expected |= {f"/world/bodies/{b}" for b in body[1:]}
     expected |= {
@@ -210,6 +212,26 @@ def test_joint_series_equal_timeline_qpos(cell_rec: tuple[Simulator, Path]) -> N
         names = read_static(path, f"/joints/{robot}", "SeriesLines:names").ravel().tolist()
         assert names == [f"j{i} (deg)" for i in range(1, 7)]
     assert np.ptp(deg[:, 0]) == pytest.approx(30.0)  # plain's joint 1 moved by -30 deg
+
+
+def test_joint_speed_and_acceleration_series(cell_rec: tuple[Simulator, Path]) -> None:
+    sim, path = cell_rec
+    m = sim.model
+    t, Q = sim.timeline.sim_times(), sim.timeline.qpos()
+    adr = [m.jnt_qposadr[m.joint(f"plain.j{i}").id] for i in range(1, 7)]
+    _, v = read(path, "/joint_speeds/plain", "Scalars:scalars")
+    _, a = read(path, "/joint_accelerations/plain", "Scalars:scalars")
+    q = np.degrees(Q[:, adr])
+    k = next(i for i in range(2, len(t)) if t[i] > t[i - 1] > t[i - 2])  # three distinct times
+    v_k = (q[k] - q[k - 1]) / (t[k] - t[k - 1])  # backward differences, by hand
+    v_j = (q[k - 1] - q[k - 2]) / (t[k - 1] - t[k - 2])
+    np.testing.assert_allclose(v[k], v_k, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(a[k], (v_k - v_j) / ((t[k] - t[k - 2]) / 2), rtol=1e-9, atol=1e-6)
+    assert np.all(v[0] == 0)
+    names = read_static(path, "/joint_speeds/plain", "SeriesLines:names").ravel().tolist()
+    assert names == [f"j{i} (deg/s)" for i in range(1, 7)]
+    names = read_static(path, "/joint_accelerations/plain", "SeriesLines:names").ravel().tolist()
+    assert names == [f"j{i} (deg/s^2)" for i in range(1, 7)]
 
 
 def test_tool_path_segments(cell_rec: tuple[Simulator, Path]) -> None:
@@ -304,6 +326,10 @@ def test_blueprint_stored(cell_rec: tuple[Simulator, Path]) -> None:
         ("3D", "/world"),
         ("TimeSeries", "/joints/arm"),
         ("TimeSeries", "/joints/plain"),
+        ("TimeSeries", "/joint_speeds/arm"),
+        ("TimeSeries", "/joint_speeds/plain"),
+        ("TimeSeries", "/joint_accelerations/arm"),
+        ("TimeSeries", "/joint_accelerations/plain"),
         ("TimeSeries", "/gripper"),
         ("TextLog", "/events"),
     }
@@ -350,15 +376,15 @@ def test_spilled_timeline_records_the_same(tmp_path: Path) -> None:
             tl.qpos(done, e.frame + 1),
         )
         done = e.frame + 1
-        mem.add_event(e.t, e.robot, e.kind, e.detail)
+        mem.add_event(e.t, e.robot, e.kind, e.detail, data=e.data)
     mem.extend(tl.sim_times(done), tl.wall_times(done), tl.qpos(done))
     assert mem.events == tl.events
     sim_mem = copy.copy(sim)
     sim_mem.timeline = mem
     assert mem.spilled_blocks == 0
     a, b = tmp_path / "spilled.rrd", tmp_path / "memory.rrd"
-    record(sim, a, chunk_frames=1000)  # batches that straddle the timeline's blocks
-    record(sim_mem, b)
+    record(sim, a, chunk_frames=1000, fps=None)  # batches that straddle the timeline's blocks
+    record(sim_mem, b, fps=None)
     ta, tb = _temporal(a), _temporal(b)
     assert ta.keys() == tb.keys()
     assert len(ta) > 10
@@ -433,13 +459,13 @@ def test_live_viewer_options_route_to_grpc(
         return url
 
     monkeypatch.setattr(rerun_log, "_spawn_viewer", fake_spawn)
-    stats = record(sim, tmp_path / "also.rrd", spawn=True, port=12345)
+    stats = record(sim, tmp_path / "also.rrd", spawn=True, port=12345, fps=None)
     assert spawned == [12345]
     assert stats.frames == sim.frames
     assert stats.path == tmp_path / "also.rrd"
     frames, _ = read(tmp_path / "also.rrd", "/joints/puma", "Scalars:scalars")
     assert len(frames) == sim.frames  # the file is complete beside the stream
-    stats = record(sim, connect=url)
+    stats = record(sim, connect=url, fps=None)
     assert stats.path is None
     assert stats.bytes is None
     assert stats.frames == sim.frames
@@ -457,3 +483,44 @@ def test_progress_bar_on_request(
     err = capsys.readouterr().err
     assert err.startswith("\rrecord:")
     assert f"/{sim.frames} [" in err
+
+
+def test_a_1khz_run_is_recorded_at_60_fps_with_its_events_exact(tmp_path: Path) -> None:
+    """The default keeps the first frame of each 1/60 s (plus the ends and every event's
+    frame): about 60 frames per simulated second instead of 1000, at each kept frame the
+    exact timeline pose, every event at its own frame and time."""
+    from workcell.examples import thesis_pick_place as pp
+
+    sim = pp.run("path", 0.001)
+    n, T = sim.frames, sim.sim_time
+    full, slim = tmp_path / "full.rrd", tmp_path / "slim.rrd"
+    a = record(sim, full, fps=None)
+    b = record(sim, slim)
+    assert a.frames == n
+    events = sim.events
+    assert math.floor(T * 60) + 1 <= b.frames <= math.floor(T * 60) + 2 + len(events)
+    assert b.bytes < a.bytes / 8
+    frames, deg = read(slim, "/joints/puma", "Scalars:scalars")
+    assert len(frames) == b.frames
+    times = sim.timeline.sim_times()
+    assert np.all(np.diff(times[frames]) <= 1 / 60 + 0.001 + 1e-9)  # gaps: 1/60 s + dt at most
+    Q = sim.timeline.qpos()
+    adr = sim._qadr["puma"]
+    np.testing.assert_allclose(deg, np.degrees(Q[frames][:, adr]), atol=1e-9)
+    assert {e.frame for e in events} <= set(frames.tolist())
+    ev_frames, _ = read(slim, "/events", "TextLog:text")
+    assert ev_frames.tolist() == sorted(e.frame for e in events)
+    t_ns, _ = read(slim, "/events", "TextLog:text", index="sim_time")
+    assert sorted(t_ns.tolist()) == sorted(round(e.t * 1e9) for e in events)
+    with pytest.raises(RecordError, match="fps must be"):
+        record(sim, tmp_path / "bad.rrd", fps=0)
+
+
+def test_kept_frames_by_hand() -> None:
+    t = np.arange(11) * 0.01  # 100 Hz for 0.1 s
+    keep = rerun_log.kept_frames(t, 50.0)  # every 0.02 s
+    assert np.flatnonzero(keep).tolist() == [0, 2, 4, 6, 8, 10]
+    keep = rerun_log.kept_frames(t, 30.0, np.array([5]))  # 0, 1/30, 2/30, 3/30 s; event at 5
+    assert np.flatnonzero(keep).tolist() == [0, 4, 5, 7, 10]
+    assert rerun_log.kept_frames(t, None).all()
+    assert rerun_log.kept_frames(t, 1000.0).all()

@@ -325,3 +325,19 @@ def test_the_float_fk_check_measures_the_robots_own_errors(name):
             assert dp == pytest.approx(np.linalg.norm(D[:3, 3]), rel=1e-12, abs=1e-13)
             want = 2 * math.asin(min(1.0, np.linalg.norm(D[:3, :3]) / math.sqrt(8)))
             assert dr == pytest.approx(want, rel=1e-9, abs=1e-12)
+
+
+def test_a_stretched_elbow_is_flagged_singular():
+    robot = get("kuka_kr6_r700", geometry=False)
+    m = family_model(robot)
+    gamma = math.atan2(m.a2, m.c3)  # the forearm's angle off the wrist-centre line
+    q = np.radians([20.0, -60.0, 0.0, 30.0, 50.0, 10.0])
+    q[2] = m.signs[2] * (-gamma + m.offsets[2])  # theta3 = -gamma: upper arm and forearm in line
+    T = robot.fk(q)
+    sols = ik_all(robot, T)
+    # at the stretch the elbow's up and down branches meet: both come out within ~1e-8
+    # rad of q (acos near 1), both exact and both flagged
+    mine = [s for s in sols if np.abs(wrapped(s.q - q)).max() < 1e-7]
+    assert 1 <= len(mine) <= 2
+    assert all(s.singular and s.success for s in mine)
+    assert not any(s.singular for s in sols if s.config[0] != mine[0].config[0])

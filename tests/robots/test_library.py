@@ -174,8 +174,8 @@ def test_pick_and_place_from_a_saved_cell_through_workcell_run(name, tmp_path, c
     assert main(["run", str(script), "--summary"]) == 0
     out = capsys.readouterr().out
     summary = json.loads(out[out.index("{") :])
-    cube = np.array(summary["objects"]["cube"])  # the part frame: a corner of the cube
-    np.testing.assert_allclose(cube + np.array([0.02, 0.02, 0.0]), stage_top, atol=2e-3)
+    cube = np.array(summary["objects"]["cube"])  # the cube's centroid, 20 mm above the top
+    np.testing.assert_allclose(cube - np.array([0.0, 0.0, 0.02]), stage_top, atol=2e-3)
     kinds = [e["kind"] for e in summary["events"]]
     assert "grasp" in kinds
     assert "release" in kinds
@@ -215,3 +215,22 @@ def test_a_library_robot_runs_in_physics_records_and_renders(tmp_path):
     image = render_frame(sim, -1, camera="cam", width=160, height=120)
     assert image.shape == (120, 160, 3)
     assert len(np.unique(image.reshape(-1, 3), axis=0)) > 50  # a scene, not a blank
+
+
+def test_the_command_language_places_library_robots():
+    from workcell.program.interpreter import Interpreter
+    from workcell.program.session import Session
+
+    out: list[str] = []
+    it = Interpreter(Session(), out=out.append)
+    it.run_line("cell new line_cell")
+    it.run_line("add robot r1 ur5e gripper translate 1 0 0")
+    it.run_line("add robot r2 kuka_kr6 q 0 -90 90 0 45 0")  # an unambiguous prefix
+    cell = it.session.require_cell()
+    assert cell.robots["r1"].builtin == "ur5e"
+    assert cell.robots["r1"].robot.gripper is not None
+    np.testing.assert_allclose(cell.robots["r1"].base[:3, 3], [1, 0, 0])
+    assert cell.robots["r2"].builtin == "kuka_kr6_r700"
+    np.testing.assert_allclose(np.degrees(cell.robots["r2"].q), [0, -90, 90, 0, 45, 0], atol=1e-12)
+    with pytest.raises(Exception, match="ur10e"):  # what is valid there is listed
+        it.run_line("add robot r3 ur7")

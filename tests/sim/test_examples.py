@@ -119,7 +119,7 @@ def test_demo_pick_place_human(capsys):
     text = capsys.readouterr().out
     assert "grasp 'cube'" in text
     assert "0 collision(s)" in text
-    assert "cube ends at (0.2200, 0.2000, 0.5000) m" in text
+    assert "cube's centroid ends at (0.2400, 0.2200, 0.5200) m" in text  # on stage 1's top centre
 
 
 @pytest.mark.parametrize("mode", MODES)
@@ -145,7 +145,7 @@ def test_example_cells_load_by_name_for_every_cli_command(tmp_path, capsys):
     from workcell.cli import main
     from workcell.examples import CELLS, example, load_cell
 
-    assert set(CELLS) == {"joints", "pick-place", "handoff"}
+    assert set(CELLS) == {"joints", "pick-place", "handoff", "obstacle"}
     cell = load_cell("handoff")
     assert set(cell.robots) == {ho.GIVER, ho.RECEIVER}
     cell.save(tmp_path / "h.json")
@@ -155,5 +155,5 @@ def test_example_cells_load_by_name_for_every_cli_command(tmp_path, capsys):
     assert [r["name"] for r in info["robots"]] == [pp.ROBOT]
     assert main(["export", "handoff", "--out", str(tmp_path / "x")]) == 0
     assert (tmp_path / "x" / "thesis_handoff.xml").exists()
-    with pytest.raises(ProgramError, match="examples: joints, pick-place, handoff"):
+    with pytest.raises(ProgramError, match="examples: joints, pick-place, handoff, obstacle"):
         example("welding")

@@ -264,7 +264,9 @@ def _overlap(sim: Simulator, frame: int, a: str, b: str) -> float:
     mujoco.mj_collision(m, d)
 
     def of(geom: int, thing: str) -> bool:
-        return m.geom(geom).name.startswith(thing + ".") or m.body(m.geom_bodyid[geom]).name == thing
+        return (
+            m.geom(geom).name.startswith(thing + ".") or m.body(m.geom_bodyid[geom]).name == thing
+        )
 
     depths = [
         -c.dist

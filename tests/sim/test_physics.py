@@ -87,6 +87,7 @@ def test_cube_ends_resting_on_stage_1_near_the_kinematic_result():
     assert lowest_point(r, pp.CUBE, "cube_block") == pytest.approx(pp.STAGE_1_TOP, abs=REST_HEIGHT)
     centre = P[:3, :3] @ np.full(3, pp.CUBE_SIZE / 2) + P[:3, 3]
     assert np.abs(centre[:2] - pp.STAGE_1_CENTRE).max() < PLACE_TOLERANCE
+    assert r.part_positions()[pp.CUBE] == pytest.approx(centre.tolist(), abs=1e-12)  # centroids
     assert at_rest(r, pp.CUBE) < 1e-3
     s = r.parts[pp.CUBE]
     assert s.resting

@@ -457,3 +457,31 @@ def test_demo_joints_human(capsys):
     out = capsys.readouterr().out
     assert "9.89 s" in out
     assert "move_joints_relative" in out
+
+
+def test_part_positions_are_centroids_where_grasps_aim():
+    """positions, the summary's objects and the grasp point agree: the part's centroid (a
+    40 mm cube whose frame is a corner: the corner plus 20 mm on each axis)."""
+    from workcell.examples import thesis_pick_place as pp
+
+    sim = Simulator(pp.build(), dt=0.01)
+    centre = np.array(pp.CUBE_CORNER) + pp.CUBE_SIZE / 2
+    assert sim.part_positions()["cube"] == pytest.approx(centre.tolist(), abs=1e-12)
+    assert sim.summary()["objects"]["cube"] == pytest.approx(centre.tolist(), abs=1e-12)
+    assert np.allclose(pp.grasp_position(), centre, atol=1e-12)
+    assert np.allclose(sim.part_pose("cube")[:3, 3], pp.CUBE_CORNER, atol=1e-12)  # the frame
+
+
+def test_a_release_event_says_where_the_centroid_was_set_down():
+    import re
+
+    from workcell.examples import thesis_pick_place as pp
+
+    sim = pp.run("path", 0.01)
+    (release,) = [e for e in sim.events if e.kind == "release"]
+    found = re.search(r": centroid \(([^)]*)\) m", release.detail)
+    assert found, release.detail
+    where = [float(v) for v in found.group(1).split(",")]
+    on_stage = [*pp.STAGE_1_CENTRE, pp.STAGE_1_TOP + pp.CUBE_SIZE / 2]  # cube on stage 1
+    assert where == pytest.approx(on_stage, abs=1e-4)
+    assert sim.part_positions()["cube"] == pytest.approx(on_stage, abs=1e-6)

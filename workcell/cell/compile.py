@@ -26,9 +26,12 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
   :data:`~workcell.meshgeoms.CONTACT_SOLREF` and ``solimp`` =
   :data:`~workcell.meshgeoms.CONTACT_SOLIMP`: with MuJoCo's default contacts a resting
   part sinks ~0.2 mm and a faceted one creeps ~0.2 mm/s; these give ~0.002 mm and none),
-  so the exported file plays in MuJoCo's viewer with its actuators; the keyframe
-  ``initial`` holds every actuator at its joint's initial value (load it in the viewer, or
-  ``mj_resetDataKeyframe``, before playing: ctrl 0 would drive the arms to q = 0).
+  so the exported file plays in MuJoCo's viewer with its actuators. Each actuator's bias
+  holds its joint's initial value q0 at ctrl 0 (``biasprm[0] = kp q0``: force =
+  ``kp (ctrl + q0 - q) - kv qdot``, ctrl range = joint range - q0), so a freshly loaded
+  export (ctrl = 0, in the viewer or a new ``MjData``) holds the initial pose instead of
+  swinging the arms to q = 0; ``ctrl = q - q0`` drives a joint to q. The keyframe
+  ``initial`` is the initial pose with ctrl 0. A comment at the top of the XML says so.
 
 Initial joint values live in ``qpos0`` through each joint's ``ref``: the link bodies are
 written at their pose for the initial q (body frame ``origin @ M(q0)``, the joint's motion) and
@@ -101,8 +104,9 @@ class CompiledCell:
     gripper), ``tool_sites``, ``gripper_bodies``, ``part_bodies`` (movable parts),
     ``free_joints`` (movable parts), ``welds`` ((robot, part) -> equality name),
     ``cameras``, ``actuators`` (the robot's position actuators: arm joints in DH order,
-    then the fingers), ``initial_ctrl`` (joint name -> the initial target of its
-    actuator). ``assets`` holds the mesh files (name -> STL bytes).
+    then the fingers), ``holds`` (joint name -> the joint value its actuator holds at
+    ctrl 0: the initial value), ``initial_ctrl`` (joint name -> the ``initial`` keyframe's
+    ctrl: 0). ``assets`` holds the mesh files (name -> STL bytes).
     """
 
     spec: mujoco.MjSpec
@@ -118,6 +122,7 @@ class CompiledCell:
     cameras: dict[str, str] = field(default_factory=dict)
     actuators: dict[str, tuple[str, ...]] = field(default_factory=dict)
     initial_ctrl: dict[str, float] = field(default_factory=dict)
+    holds: dict[str, float] = field(default_factory=dict)
     assets: Mapping[str, bytes] = field(default_factory=dict)
 
 
@@ -171,6 +176,22 @@ def _set_initial_q(child: mujoco.MjSpec, robot, q: np.ndarray) -> None:  # noqa:
         T = pose_from_pos_quat(body.pos, body.quat) @ jt.motion(float(q[i]))
         body.pos, body.quat = _pos_quat(T)
         child.joint(joint_name(robot, "", i)).ref = float(q[i])
+
+
+def _comment(cell: Workcell) -> str:
+    """The note at the top of the exported XML: how its actuators hold the initial pose
+    (no '--' in it: XML comments may not hold one)."""
+    text = (
+        f" workcell cell '{cell.name}'. Every robot joint and finger has a position actuator "
+        "named as its joint whose ctrl is the joint's offset (rad, m) from its initial "
+        "value (the joint's ref): force = kp (ctrl + ref - q) - kv qdot. A freshly loaded "
+        "model (ctrl 0, in MuJoCo's viewer or a new MjData) holds the initial pose; to send "
+        "joint j to q, set ctrl = q - ref. Keyframe 'initial' is that pose at rest. To view "
+        "it, run python -m mujoco.viewer and drop this file on its window. "
+    )
+    while "--" in text:
+        text = text.replace("--", "- -")
+    return text
 
 
 def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
@@ -247,9 +268,15 @@ def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
         targets.update(zip(out.joint_names[r.name], np.asarray(r.q, dtype=float), strict=True))
         if r.robot.gripper is not None:  # fingers open
             targets.update(dict.fromkeys(out.finger_joints[r.name], r.robot.gripper.finger_travel))
+    for name, q0 in targets.items():  # hold q0 at ctrl = 0: force = kp (ctrl + q0 - q) - kv qdot
+        act = spec.actuator(name)
+        act.biasprm[0] = act.gainprm[0] * q0
+        act.ctrlrange = [act.ctrlrange[0] - q0, act.ctrlrange[1] - q0]
     if targets:
-        spec.add_key(name=INITIAL_KEY, ctrl=[float(v) for v in targets.values()])
-    out.initial_ctrl = targets
+        spec.add_key(name=INITIAL_KEY, ctrl=[0.0] * len(targets))
+    out.initial_ctrl = dict.fromkeys(targets, 0.0)
+    out.holds = targets
+    spec.comment = _comment(cell)
     spec.assets = assets
     out.assets = assets
     return out

@@ -3,7 +3,10 @@
 A :class:`Workcell` holds one modeller :class:`~workcell.Model` (``cell.model``) for all
 part geometry and, by name:
 
-- static parts: a block or object of the model at a world pose (4x4 rigid, m), coloured;
+- static parts: a block or object of the model at a world pose (4x4 rigid, m), coloured
+  (without a colour of its own or given, the next of :data:`STATIC_COLOURS`, muted
+  tones; movable parts take the next of :data:`MOVABLE_COLOURS`, vivid ones; robots keep
+  their links' colours: pale arms, dark bases, orange fingers);
 - movable parts: the same plus a density (kg/m^3); mass, bounding box and centroid frame
   (the thesis's grasp data) are computed from the geometry, never stored;
 - robots: a :class:`~workcell.robots.Robot` (a library robot by name,
@@ -45,9 +48,10 @@ from workcell.spatial import as_transform, translation
 
 __all__ = [
     "BUILTIN_ROBOTS",
-    "DEFAULT_COLOUR",
     "FORMAT",
     "GRIPPER_PARAMETERS",
+    "MOVABLE_COLOURS",
+    "STATIC_COLOURS",
     "VERSION",
     "Camera",
     "MovablePart",
@@ -59,7 +63,25 @@ __all__ = [
 
 FORMAT = "workcell-cell"
 VERSION = 1
-DEFAULT_COLOUR = (0.6, 0.6, 0.62, 1.0)
+# the default colours (RGBA), by kind, one after another per part: muted tones for what
+# stands still, vivid ones for what robots carry, none close to the robots' pale arms,
+# dark bases and orange fingers, nor to the blue-grey floor of the pictures
+STATIC_COLOURS = (
+    (0.55, 0.45, 0.35, 1.0),  # wood
+    (0.36, 0.50, 0.72, 1.0),  # slate blue
+    (0.42, 0.62, 0.45, 1.0),  # sage
+    (0.72, 0.64, 0.46, 1.0),  # sand
+    (0.56, 0.42, 0.58, 1.0),  # mauve
+    (0.40, 0.62, 0.64, 1.0),  # teal
+)
+MOVABLE_COLOURS = (
+    (0.86, 0.18, 0.14, 1.0),  # red
+    (0.15, 0.62, 0.25, 1.0),  # green
+    (0.96, 0.78, 0.10, 1.0),  # yellow
+    (0.14, 0.42, 0.92, 1.0),  # blue
+    (0.82, 0.22, 0.72, 1.0),  # magenta
+    (0.10, 0.78, 0.82, 1.0),  # cyan
+)
 BUILTIN_ROBOTS: Mapping[str, Callable[[], Robot]] = MappingProxyType(
     {name: functools.partial(get, name) for name in library()}
 )
@@ -281,11 +303,17 @@ class Workcell:
         return level, name
 
     def _colour(
-        self, colour: ArrayLike | None, entity: tuple[str, str], what: str
+        self,
+        colour: ArrayLike | None,
+        entity: tuple[str, str],
+        what: str,
+        palette: tuple[tuple[float, ...], ...],
+        index: int,
     ) -> tuple[float, ...]:
+        """The given colour, else the entity's own, else ``palette[index]`` (cycled)."""
         if colour is None:
             own = self.model.info(entity).colour
-            return tuple(own) if own is not None else DEFAULT_COLOUR
+            return tuple(own) if own is not None else palette[index % len(palette)]
         try:
             return check_colour(colour)
         except ModelError as exc:
@@ -307,7 +335,8 @@ class Workcell:
         T = as_transform(np.eye(4) if pose is None else pose, rigid=True, name=f"{what} pose")
         if len(self.model.world_mesh(ent).faces) == 0:
             raise GeometryError(f"{what}: entity {ent[0]} '{ent[1]}' is empty (no faces)")
-        part = StaticPart(name, ent, T, self._colour(colour, ent, what))
+        rgba = self._colour(colour, ent, what, STATIC_COLOURS, len(self._static))
+        part = StaticPart(name, ent, T, rgba)
         self._static[name] = part
         return part
 
@@ -335,7 +364,8 @@ class Workcell:
                 f"{what}: entity {ent[0]} '{ent[1]}' has volume {volume:.3g} m^3; a movable "
                 "part needs a closed solid with positive volume"
             )
-        part = MovablePart(name, ent, T, self._colour(colour, ent, what), float(density))
+        rgba = self._colour(colour, ent, what, MOVABLE_COLOURS, len(self._movable))
+        part = MovablePart(name, ent, T, rgba, float(density))
         self._movable[name] = part
         return part
 

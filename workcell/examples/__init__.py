@@ -1,4 +1,5 @@
-"""Example builders: the thesis's solids and its three workcells (ch. 5).
+"""Example builders: the thesis's solids and its three workcells (ch. 5), and beyond it
+the obstacle cell (a wall between two stages, for collision-free planning).
 
 Each workcell example has ``build()`` (the cell), ``program(sim)`` (the thesis's program)
 and ``run(mode, dt, **options)`` (both, through :func:`run_program`).
@@ -25,6 +26,7 @@ CELLS = {
     "joints": "workcell.examples.thesis_joints",
     "pick-place": "workcell.examples.thesis_pick_place",
     "handoff": "workcell.examples.thesis_handoff",
+    "obstacle": "workcell.examples.obstacle",  # beyond the thesis: a wall between two stages
 }
 
 CELL_HELP = f"a cell saved by Workcell.save (.json), or an example cell: {', '.join(CELLS)}"

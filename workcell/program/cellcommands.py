@@ -102,7 +102,8 @@ class SaveCell(Command, wire="save_cell"):
 
 @dataclass(frozen=True)
 class ExampleCell(Command, wire="example_cell"):
-    """Replace the cell by one of the thesis's example cells: joints, pick-place, handoff."""
+    """Replace the cell by an example cell: the thesis's joints, pick-place, handoff, or
+    obstacle (a wall between two stages)."""
 
     name: str = arg(a.choice(*EXAMPLES))
 

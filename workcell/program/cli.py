@@ -58,10 +58,14 @@ def _run(args: argparse.Namespace) -> int:
         run_script(args.script, session, echo=args.echo)
     except WorkcellError as exc:
         if session.sim is not None:  # keep what ran, with the error, in the files asked for
-            session.sim.log_error(exc)
+            session.sim._log_error(exc)
             _outputs(args, session.sim)
         raise
     _outputs(args, session.sim)
+    if args.cycle_time and session.sim is not None:
+        from workcell.sim.cycle import format_table
+
+        print(format_table(session.sim.cycle_time()))
     if args.summary and session.sim is not None:
         import json
 
@@ -80,8 +84,11 @@ def _outputs(args: argparse.Namespace, sim: Any) -> None:
     if args.save:
         from workcell.record import record
 
-        stats = record(sim, args.save)
-        print(f"recording written to {stats.path} (open it with: rerun {stats.path})")
+        stats = record(sim, args.save, fps=args.record_fps or None)
+        print(
+            f"recording written to {stats.path} ({stats.frames} of {sim.frames} frames; "
+            f"open it with: rerun {stats.path})"
+        )
     if args.render:
         from workcell.record import contact_sheet
 
@@ -166,7 +173,16 @@ def register(sub: Any) -> None:
     run.add_argument(
         "--summary", action="store_true", help="print the simulation's summary as JSON at the end"
     )
+    run.add_argument(
+        "--cycle-time",
+        action="store_true",
+        help="print the cycle-time table at the end: each command's start, duration and the "
+        "limit that set it",
+    )
     run.add_argument("--save", metavar="FILE.rrd", help="record the run (also up to an error)")
+    from workcell.cli import add_record_fps
+
+    add_record_fps(run)
     run.add_argument("--render", metavar="FILE.png", help="a contact sheet of the run's key frames")
     run.set_defaults(func=_run)
 

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from workcell.program.base import Command
     from workcell.program.session import Session
 
-__all__ = ["format_result", "rpy_degrees"]
+__all__ = ["format_result", "joint_by_joint_clocks", "rpy_degrees"]
 
 
 def _nums(v: Any, digits: int = 6) -> str:
@@ -45,6 +45,18 @@ def _joints(q: np.ndarray, session: Session | None, robot: str) -> str:
         f"{np.degrees(v):.6g} deg" if r else f"{v:.6g} m" for v, r in zip(q, kinds, strict=True)
     ]
     return "(" + ", ".join(parts) + ")"
+
+
+def joint_by_joint_clocks(sim_time: float, frames: int, dt: float) -> str:
+    """The two clocks of joint-by-joint mode, side by side, for people: the simulated time
+    (s, the thesis's clock) and frames x dt (s)."""
+    return (
+        "joint-by-joint mode keeps two clocks:\n"
+        f"  sim time (thesis clock) {sim_time:9.3f} s: each move lasts its largest joint "
+        "motion / speed (eq. 4.27), as in path mode\n"
+        f"  frames x dt             {(frames - 1) * dt:9.3f} s: {frames - 1} steps of {dt:g} s, "
+        "the joints moving one after another"
+    )
 
 
 def format_result(command: Command, result: Any, session: Session | None = None) -> str:
@@ -85,16 +97,25 @@ def format_result(command: Command, result: Any, session: Session | None = None)
             f"simulated time {result['sim_time_s']:.6g} s, wall time {result['wall_time_s']:.4g} s, "
             f"{result['frames']} frames, {result['collisions']} collisions"
         ]
-        lines += [f"  {name} at {_nums(p)} m" for name, p in result.get("objects", {}).items()]
+        sim = session.sim if session is not None else None
+        if sim is not None and sim.mode == "joint-by-joint":
+            lines.append(joint_by_joint_clocks(result["sim_time_s"], result["frames"], sim.dt))
+        objects = result.get("objects", {}).items()
+        lines += [f"  {name} centroid at {_nums(p)} m" for name, p in objects]
         return "\n".join(lines)
     if isinstance(command, simc.SimTime):
         return f"{result:.6g} s"
+    if isinstance(command, simc.CycleTime):
+        from workcell.sim.cycle import format_table
+
+        return format_table(result)
     if isinstance(command, simc.Clearance):
         return f"{result:.6g} m"
     if isinstance(command, simc.Frames):
         return f"{result} frames"
     if isinstance(command, simc.PartPositions):
-        return "\n".join(f"{k} at {_nums(v)} m" for k, v in result.items()) or "no movable parts"
+        text = "\n".join(f"{k} centroid at {_nums(v)} m" for k, v in result.items())
+        return text or "no movable parts"
     if isinstance(command, cmd.Remove):
         return "removed " + ", ".join(result)
     if isinstance(result, dict):

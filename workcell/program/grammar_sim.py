@@ -31,12 +31,17 @@ from workcell.program.keytree import Cursor, Keys, Leaf, Node, Options, Seq, Set
 from workcell.program.params import Choice, Name, Number, Ref, Text, Vector
 from workcell.program.targets import Target
 from workcell.robots.library import library
+from workcell.sim.profiles import PROFILES
 
 __all__ = ["ALIASES", "BRANCHES"]
 
 
 class PointOrPart(Node):
-    """After ``at``: three numbers (a position, m) or a part name (its centroid)."""
+    """After ``at`` (``via``, ``to``): three numbers (a position, m) or a part name (its
+    centroid), stored under ``prefix`` + position / part / anchor."""
+
+    def __init__(self, prefix: str = "") -> None:
+        self.prefix = prefix
 
     def expects(self, cur: Cursor) -> list[str]:
         return ["<x y z (m)>", *(cur.names("part") or ["<part>"])]
@@ -46,10 +51,10 @@ class PointOrPart(Node):
         if tok is None and cur.completing:
             cur.fail("", self.expects(cur))
         if tok is not None and tok.kind == "number":
-            Vector("position", 3, "length", what="x y z (m)").match(cur)
+            Vector(self.prefix + "position", 3, "length", what="x y z (m)").match(cur)
         else:
-            Name("part", "part").match(cur)
-            cur.values["anchor"] = "centroid"
+            Name(self.prefix + "part", "part").match(cur)
+            cur.values[self.prefix + "anchor"] = "centroid"
 
 
 _POSE: dict[str, Node] = {
@@ -88,7 +93,49 @@ def _target(v: dict[str, Any]) -> Target:
 
 
 _ROBOT = Name("robot", "robot")
+_APPROACH = {"approach": Number("approach", "length", what="approach (m)")}
 _JOINTS = Vector("q", None, "joints", robot_key="robot", what="joint values (deg)")
+_ZONE = {"zone": Number("zone", "length", what="zone (m)")}
+_TOOL = {
+    "speed": Number("speed", "tool_speed", what="tool speed (m/s)"),
+    "acceleration": Number("acceleration", "tool_acceleration", what="tool acceleration (m/s^2)"),
+    **_ZONE,
+}
+TOOL_SYNTAX = "speed V [acceleration A] [zone Z]"
+
+
+def _tool_move(build: Any, v: dict[str, Any], what: str) -> Any:
+    if "speed" not in v:
+        raise ProgramError(f"{what}: give the tool speed, e.g. 'speed 250 mm/s'")
+    return build(v["speed"], v.get("acceleration"), v.get("zone", 0.0))
+
+
+def _circular(v: dict[str, Any]) -> simc.MoveCircular:
+    via = Target(position=v.get("via_position"), part=v.get("via_part"))
+    return _tool_move(
+        lambda sp, ac, z: simc.MoveCircular(v["robot"], via, _target(v), sp, ac, z),
+        v,
+        "move circular",
+    )
+
+
+class JointsOrPose(Node):
+    """After ``move joints absolute ROBOT``: joint values (deg; m for a prismatic joint)
+    or the name of one of the robot's poses (``home``)."""
+
+    pose = Name("q", "pose:robot", what="pose name")
+
+    def expects(self, cur: Cursor) -> list[str]:
+        return [*_JOINTS.expects(cur), *self.pose.expects(cur)]
+
+    def match(self, cur: Cursor) -> None:
+        tok = cur.peek()
+        if tok is None and cur.completing:
+            cur.fail("", self.expects(cur))
+        if tok is not None and tok.kind == "word":
+            self.pose.match(cur)
+        else:
+            _JOINTS.match(cur)
 
 
 def _leaf(build: Any, syntax: str, summary: str, example: str) -> Leaf:
@@ -104,28 +151,74 @@ _MOVE = Keys(
         "joints": Keys(
             {
                 "absolute": _robot_leaf(
-                    lambda v: simc.MoveJointsAbsolute(v["robot"], v["q"]),
-                    "move joints absolute ROBOT J1 .. Jn [deg|rad]",
-                    "move the joints to these values (deg, or m for a prismatic joint)",
-                    "move joints absolute puma -60 0 -70 0 90 30",
-                    _JOINTS,
+                    lambda v: simc.MoveJointsAbsolute(
+                        v["robot"], v["q"], v.get("plan", False), v.get("zone", 0.0)
+                    ),
+                    "move joints absolute ROBOT J1 .. Jn [deg|rad] | POSE [plan] [zone Z]",
+                    "move the joints to these values (deg, or m for a prismatic joint), or "
+                    "to a named pose of the robot (home); plan: along a collision-free path; "
+                    "zone: blend into the next move within Z (m) of the end",
+                    "move joints absolute puma -60 0 -70 0 90 30 plan",
+                    JointsOrPose(),
+                    Options({"plan": Set("plan", True), **_ZONE}),
                 ),
                 "relative": _robot_leaf(
-                    lambda v: simc.MoveJointsRelative(v["robot"], v["q"]),
-                    "move joints relative ROBOT D1 .. Dn [deg|rad]",
-                    "move the joints by these amounts (deg, or m for a prismatic joint)",
+                    lambda v: simc.MoveJointsRelative(v["robot"], v["q"], v.get("zone", 0.0)),
+                    "move joints relative ROBOT D1 .. Dn [deg|rad] [zone Z]",
+                    "move the joints by these amounts (deg, or m for a prismatic joint); "
+                    "zone: blend into the next move",
                     "move joints relative puma -70 -10 10 30 -20 -10",
                     _JOINTS,
+                    Options(_ZONE),
                 ),
             }
         ),
         "end_effector": _robot_leaf(
-            lambda v: simc.MoveEndEffector(v["robot"], _target(v), v.get("config")),
-            f"move end_effector ROBOT {POSE_SYNTAX} [config CFG]",
-            "move the tool to a pose (inverse kinematics, then linear in joints); "
-            "config: Puma solution letters l|r u|d n|f",
+            lambda v: simc.MoveEndEffector(
+                v["robot"], _target(v), v.get("config"), v.get("plan", False), v.get("zone", 0.0)
+            ),
+            f"move end_effector ROBOT {POSE_SYNTAX} [config CFG] [plan] [zone Z]",
+            "move the tool to a pose (inverse kinematics, then a joint move); "
+            "config: Puma solution letters l|r u|d n|f; plan: along a collision-free path; "
+            "zone: blend into the next move",
             "move end_effector puma at 0.4 0 0.3 down",
-            Options({**_POSE, "config": Name("config", what="configuration, e.g. lun")}),
+            Options(
+                {
+                    **_POSE,
+                    "config": Name("config", what="configuration, e.g. lun"),
+                    "plan": Set("plan", True),
+                    **_ZONE,
+                }
+            ),
+        ),
+        "linear": _robot_leaf(
+            lambda v: _tool_move(
+                lambda sp, ac, z: simc.MoveLinear(v["robot"], _target(v), sp, ac, z),
+                v,
+                "move linear",
+            ),
+            f"move linear ROBOT {POSE_SYNTAX} {TOOL_SYNTAX}",
+            "move the tool point along a straight line at speed V (m/s; mm/s) and "
+            "acceleration A (m/s^2, default 1.2), slower only where the joints must; "
+            "zone: blend into the next move within Z (m)",
+            "move linear puma offset 0 0.1 0 speed 250 mm/s zone 10 mm",
+            Options({**_POSE, **_TOOL}),
+        ),
+        "circular": _robot_leaf(
+            _circular,
+            "move circular ROBOT via X Y Z|PART [to X Y Z|PART | on PART] [offset DX DY DZ] "
+            f"[rpy RX RY RZ | down] {TOOL_SYNTAX}",
+            "move the tool point along the arc through its position, the via point and "
+            "the end point, at speed V; orientation interpolated to the end pose's",
+            "move circular puma via 0.3 0.05 0.5 to 0.25 0.1 0.5 speed 200 mm/s",
+            Keys({"via": PointOrPart("via_")}),
+            Options(
+                {
+                    "to": PointOrPart(),
+                    **{k: _POSE[k] for k in ("on", "offset", "rpy", "down")},
+                    **_TOOL,
+                }
+            ),
         ),
         "straight": _robot_leaf(
             lambda v: simc.MoveStraightLine(v["robot"], _target(v), v.get("step", 0.005)),
@@ -172,8 +265,8 @@ _CELL = Keys(
             Choice("name", {k: k for k in cellc.EXAMPLES}),
             _leaf(
                 lambda v: cellc.ExampleCell(v["name"]),
-                "cell example joints|pick-place|handoff",
-                "load one of the thesis's example cells (ch. 5)",
+                "cell example joints|pick-place|handoff|obstacle",
+                "load an example cell: the thesis's three (ch. 5), or a wall between two stages",
                 "cell example joints",
             ),
         ),
@@ -278,7 +371,10 @@ def _simulate(v: dict[str, Any]) -> simc.Simulate:
 _SIMULATE_LEAF = _leaf(
     _simulate,
     "simulate [path|joint-by-joint|playback] [dt T] [realtime]",
-    "start simulating the cell (default path, dt 0.01 s)",
+    "start simulating the cell (default path, dt 0.01 s); in joint-by-joint mode the joints "
+    "move one after another, a frame every dt, while the simulated time is the thesis's "
+    "clock (each move lasts its largest joint motion / speed, as in path mode): 'summary' "
+    "shows both",
     "simulate path dt 0.01",
 )
 _SIMULATE = Keys(
@@ -317,6 +413,25 @@ BRANCHES: dict[str, Node] = {
         "speed puma 0.3 rad/s",
         Number("speed", "speed", what="speed (deg/s)"),
     ),
+    "override": _robot_leaf(
+        lambda v: simc.SetOverride(v["robot"], v["override"]),
+        "override ROBOT P [%]",
+        "the robot's speed override: P % of its speeds, (P %)^2 of its accelerations: "
+        "the same paths in 100/P the time",
+        "override puma 50 %",
+        Number("override", "fraction", what="override (%)"),
+    ),
+    "profile": Seq(
+        Choice("profile", {p: p for p in PROFILES}),
+        Options({"acceleration": Number("acceleration", "angular_acceleration", what="rad/s^2")}),
+        _leaf(
+            lambda v: simc.SetProfile(v["profile"], v.get("acceleration")),
+            "profile linear|trapezoid|quintic|jerk [acceleration A]",
+            "joint moves at the robot's speed (the thesis's linear; trapezoid with "
+            "acceleration A, deg/s^2; quintic) or within every joint's own limits (jerk)",
+            "profile jerk",
+        ),
+    ),
     "move": _MOVE,
     "close": Keys(
         {
@@ -335,12 +450,118 @@ BRANCHES: dict[str, Node] = {
     "open": Keys(
         {
             "gripper": _robot_leaf(
-                lambda v: simc.OpenGripper(v["robot"]),
-                "open gripper ROBOT",
-                "release the part",
+                lambda v: simc.OpenGripper(v["robot"], v.get("settle", False)),
+                "open gripper ROBOT [settle]",
+                "release the part; settle: a part in mid-air drops onto what is below it",
                 "open gripper puma",
+                Options({"settle": Set("settle", True)}),
             )
         }
+    ),
+    "planning": Seq(
+        Options(
+            {
+                "clearance": Number("clearance", "length", what="clearance (m)"),
+                "time": Number("time_limit", "time", what="time limit (s)"),
+                "seed": Number("seed", integer=True, what="seed"),
+                "near": Number("near_clearance", "length", what="near clearance (m)"),
+            }
+        ),
+        _leaf(
+            lambda v: simc.SetPlanning(
+                v.get("clearance"), v.get("time_limit"), v.get("seed"), v.get("near_clearance")
+            ),
+            "planning [clearance L] [time T] [seed N] [near L]",
+            "how planned moves search: clearance L (m, 0.005), time limit T (s, 5) per "
+            "search, random seed N (0), near clearance L (m, 0.001) of task-level close work; "
+            "shows the settings",
+            "planning clearance 5mm time 5 seed 0",
+        ),
+    ),
+    "pick": Seq(
+        Name("part", "movable", what="movable part"),
+        Keys(
+            {
+                "with": Seq(
+                    _ROBOT,
+                    Options(_APPROACH),
+                    _leaf(
+                        lambda v: simc.Pick(v["robot"], v["part"], v.get("approach", 0.08)),
+                        "pick PART with ROBOT [approach L]",
+                        "grasp a part: grasp pose, configuration and a collision-free path "
+                        "chosen automatically; approach and retreat L (m, 0.08) along the "
+                        "tool axis",
+                        "pick cube with puma",
+                    ),
+                )
+            }
+        ),
+    ),
+    "place": Seq(
+        Name("part", "movable", what="movable part"),
+        Keys(
+            {
+                "on": Seq(
+                    Name("on", "part", what="support (a part)"),
+                    Keys(
+                        {
+                            "with": Seq(
+                                _ROBOT,
+                                Options(
+                                    {
+                                        "at": Vector("position", 2, "length", what="x y (m)"),
+                                        **_APPROACH,
+                                    }
+                                ),
+                                _leaf(
+                                    lambda v: simc.Place(
+                                        v["robot"],
+                                        v["part"],
+                                        v["on"],
+                                        v.get("position"),
+                                        v.get("approach", 0.08),
+                                    ),
+                                    "place PART on SUPPORT with ROBOT [at X Y] [approach L]",
+                                    "put a held part down resting on a support, its centroid "
+                                    "over X Y (m; default the centre of the support's top), "
+                                    "release it, retreat",
+                                    "place cube on stage_1 with puma",
+                                ),
+                            )
+                        }
+                    ),
+                )
+            }
+        ),
+    ),
+    "handover": Seq(
+        Name("part", "movable", what="movable part"),
+        Keys(
+            {
+                "from": Seq(
+                    Name("giver", "robot", what="robot holding it"),
+                    Keys(
+                        {
+                            "to": Seq(
+                                Name("receiver", "robot", what="robot taking it"),
+                                Options(_APPROACH),
+                                _leaf(
+                                    lambda v: simc.Handover(
+                                        v["giver"],
+                                        v["receiver"],
+                                        v["part"],
+                                        v.get("approach", 0.08),
+                                    ),
+                                    "handover PART from GIVER to RECEIVER [approach L]",
+                                    "hand a part over at a meeting pose found in both workspaces",
+                                    "handover sphere from puma_1 to puma_2",
+                                ),
+                            )
+                        }
+                    ),
+                )
+            }
+        ),
     ),
     "wait": Seq(
         Number("seconds", "time", what="seconds"),
@@ -379,7 +600,17 @@ BRANCHES: dict[str, Node] = {
             "clearance puma table_1",
         ),
     ),
-    "time": _query(lambda v: simc.SimTime(), "time", "the simulated clock (s)"),
+    "time": Keys(
+        {
+            "detail": _leaf(
+                lambda v: simc.CycleTime(),
+                "time detail",
+                "the cycle-time report: each command's start, duration and the limit that set it",
+                "time detail",
+            )
+        },
+        empty=_query(lambda v: simc.SimTime(), "time", "the simulated clock (s)"),
+    ),
     "frames": _query(lambda v: simc.Frames(), "frames", "frames on the timeline"),
     "events": _query(lambda v: simc.Events(), "events", "the timeline's events"),
     "robots": _query(lambda v: simc.Robots(), "robots", "the robots being simulated"),
@@ -387,7 +618,7 @@ BRANCHES: dict[str, Node] = {
         lambda v: simc.Summary(), "summary", "simulated and wall time, frames, events"
     ),
     "positions": _query(
-        lambda v: simc.PartPositions(), "positions", "movable parts' positions (m)"
+        lambda v: simc.PartPositions(), "positions", "movable parts' centroids (m)"
     ),
 }
 
@@ -397,10 +628,16 @@ ALIASES: dict[str, Node] = {
     "move_joints_relative": _MOVE.branches["joints"].branches["relative"],  # type: ignore[attr-defined]
     "move_end_effector": _MOVE.branches["end_effector"],
     "move_straight_line": _MOVE.branches["straight"],
+    "move_linear": _MOVE.branches["linear"],
+    "move_circular": _MOVE.branches["circular"],
+    "set_override": BRANCHES["override"],
+    "set_profile": BRANCHES["profile"],
+    "cycle_time": BRANCHES["time"].branches["detail"],  # type: ignore[attr-defined]
     "close_gripper": BRANCHES["close"].branches["gripper"],  # type: ignore[attr-defined]
     "open_gripper": BRANCHES["open"].branches["gripper"],  # type: ignore[attr-defined]
     "set_speed": BRANCHES["speed"],
     "set_mode": BRANCHES["mode"],
+    "set_planning": BRANCHES["planning"],
     "tool_pose": BRANCHES["pose"],
-    "sim_time": BRANCHES["time"],
+    "sim_time": BRANCHES["time"].empty,  # type: ignore[attr-defined]
 }

@@ -39,10 +39,16 @@ def _locate(exc: WorkcellError, where: str, line: str) -> WorkcellError:
 
 
 class Interpreter:
-    """Parses and runs lines on ``session``; ``out`` receives the text of each result."""
+    """Parses and runs lines on ``session``; ``out`` receives the text of each result,
+    ``clear`` is called for the ``clear`` command (the shell clears a terminal's screen)."""
 
-    def __init__(self, session: Session, out: Callable[[str], Any] = print) -> None:
-        self.session, self.out = session, out
+    def __init__(
+        self,
+        session: Session,
+        out: Callable[[str], Any] = print,
+        clear: Callable[[], Any] = lambda: None,
+    ) -> None:
+        self.session, self.out, self.clear = session, out, clear
 
     def run_line(self, line: str, where: str = "") -> list[Any]:
         """Run every command on ``line``; returns their results.
@@ -51,19 +57,24 @@ class Interpreter:
         failure; QuitRequest for ``quit``.
         """
         results = []
-        try:
-            parsed = parse_line(line, self.session)
-        except WorkcellError as exc:
-            raise _locate(exc, where, line) from None
-        for item in parsed:
+        parsed = parse_line(line, self.session)  # the line's syntax is checked here, then
+        while True:  # each command's names when it comes, after the ones before it ran
+            try:
+                item = next(parsed, None)
+            except WorkcellError as exc:
+                raise _locate(exc, where, line) from None
+            if item is None:
+                return results
             if isinstance(item, Meta):
                 if item.kind == "quit":
                     raise QuitRequest
-                self.out(help_text(item.topic))
+                if item.kind == "clear":
+                    self.clear()
+                else:
+                    self.out(help_text(item.topic))
                 results.append(None)
                 continue
             results.append(self.run_command(item, where, line))
-        return results
 
     def run_command(self, command: Command, where: str = "", line: str = "") -> Any:
         """Run one command, print its result; errors get ``where`` in front."""
@@ -85,7 +96,7 @@ def check_script(text: str, name: str = "<script>") -> int:
     n = 0
     for i, line in enumerate(split_lines(text), 1):
         try:
-            n += len(parse_line(line))
+            n += len(list(parse_line(line)))
         except WorkcellError as exc:
             raise _locate(exc, f"{name}:{i}: ", line) from None
     return n

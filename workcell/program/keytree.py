@@ -93,13 +93,17 @@ class Cursor:
     def names(self, kind: str) -> list[str] | None:
         """Known names of ``kind`` (None without a context: names are not checked).
 
-        Kind ``relation:KEY``: the relations of the owner collected under value KEY.
+        Kind ``relation:KEY``: the relations of the owner collected under value KEY;
+        ``pose:KEY``: the named poses of the robot collected under KEY.
         """
         if self.ctx is None:
             return None
         if kind.startswith("relation:"):
             owner = self.values.get(kind.split(":", 1)[1])
             return None if owner is None else list(self.ctx.relation_names(owner))
+        if kind.startswith("pose:"):
+            robot = self.values.get(kind.split(":", 1)[1])
+            return None if robot is None else self.ctx.pose_names(robot)
         return list(self.ctx.names(kind))
 
 

@@ -3,18 +3,23 @@
 :func:`parse_line` splits a line into commands (``;`` separates them, ``#`` starts a
 comment) and matches each against the key tree (:data:`TREE`: the datamodel and solids
 of :mod:`~workcell.program.grammar_model`, the cell and simulation of
-:mod:`~workcell.program.grammar_sim`, and ``help``/``quit``). Keywords may be shortened
-to any unambiguous prefix (``mo j a`` is ``move joints absolute``); the Simulator's own
+:mod:`~workcell.program.grammar_sim`, and ``help``, ``quit``/``exit``, ``clear``).
+Keywords may be shortened to any unambiguous prefix (``mo j a`` is ``move joints absolute``); the Simulator's own
 method names (``move_joints_absolute`` ...) are accepted too. Values are for people:
 angles in degrees and lengths in metres unless a unit says otherwise.
 
-With a context (a :class:`~workcell.program.session.Session`), names are checked as the
-line is read, so an unknown robot or entity is reported at its column with the known
-names; without one, the commands check them when they run.
+The whole line's syntax is checked before its first command is returned. With a context
+(a :class:`~workcell.program.session.Session`), each command's names are checked when
+that command is taken from :func:`parse_line`'s iterator, i.e. after the commands before
+it on the line have run (``create cube c1; properties c1`` works), so an unknown robot or
+entity is reported at its column with the known names; without a context, the commands
+check them when they run.
 """
 
 from __future__ import annotations
 
+import textwrap
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,7 +40,7 @@ from workcell.program.keytree import (
     leaves,
     match,
 )
-from workcell.program.lexer import split_commands, tokenize
+from workcell.program.lexer import Token, split_commands, tokenize
 
 __all__ = [
     "TREE",
@@ -51,13 +56,15 @@ UNITS_NOTE = (
     "Units: angles in degrees and lengths in metres unless you say otherwise: write a unit\n"
     "after a number (90 deg, 1.57 rad, 100 mm, 0.1 m, 0.3 rad/s, 20 ms) or glued to it\n"
     "(90deg, 100mm); a unit after a list of numbers applies to all of them. Speeds are\n"
-    "deg/s, times seconds. Keywords may be shortened to any unambiguous prefix."
+    "deg/s (a tool's m/s: 250 mm/s), accelerations deg/s^2 (a tool's m/s^2), times\n"
+    "seconds, overrides %. Keywords may be shortened to any unambiguous prefix."
 )
 
 
 @dataclass(frozen=True)
 class Meta:
-    """A front-end command that is no part of the vocabulary: ``help`` or ``quit``."""
+    """A front-end command that is no part of the vocabulary: ``help``, ``quit`` (also
+    ``exit``) or ``clear``."""
 
     kind: str
     topic: tuple[str, ...] = ()
@@ -89,28 +96,43 @@ _META: dict[str, Node] = {
         ),
     ),
     "quit": Leaf(lambda v: Meta("quit"), "quit", "leave the shell", "quit"),
+    "exit": Leaf(lambda v: Meta("quit"), "exit", "leave the shell (same as quit)", "exit"),
+    "clear": Leaf(lambda v: Meta("clear"), "clear", "clear the screen (on a terminal)", "clear"),
 }
 
 TREE = Keys({**MODEL_BRANCHES, **SIM_BRANCHES, **_META, **ALIASES}, hidden=tuple(ALIASES))
 
 
-def parse_line(line: str, ctx: Any = None) -> list[Command | Meta]:
-    """The commands on one line (none for a blank or comment line).
+def parse_line(line: str, ctx: Any = None) -> Iterator[Command | Meta]:
+    """The commands on one line, in order (none for a blank or comment line).
+
+    The whole line is checked first, without names: a syntax error anywhere on it raises
+    here, before any command is returned. With ``ctx`` (a Session) each command is then
+    matched again against the context when it is taken from the iterator, so names made
+    by the commands before it on the line (once they have run) are known::
+
+        for command in parse_line("create cube c1 size 40 mm; properties c1", session):
+            session.execute(command)
 
     Raises CommandSyntaxError (a ProgramError) with the column of the offending token and
     the words valid there; or ProgramError when values do not fit together (e.g. a
     matrix and SRT factors at once); a command's own argument checks raise ProgramError.
     """
-    out: list[Command | Meta] = []
-    for tokens in split_commands(line):
-        try:
-            m = match(TREE, tokens, ctx)
-        except CommandSyntaxError as exc:
-            exc.line = line
-            exc.args = (exc._text(),)
-            raise
-        out.append(m.leaf.build(m.values))
-    return out
+    commands = split_commands(line)
+    built = [_build(tokens, line, None) for tokens in commands]
+    if ctx is None:
+        return iter(built)
+    return (_build(tokens, line, ctx) for tokens in commands)
+
+
+def _build(tokens: list[Token], line: str, ctx: Any) -> Command | Meta:
+    try:
+        m = match(TREE, tokens, ctx)
+    except CommandSyntaxError as exc:
+        exc.line = line
+        exc.args = (exc._text(),)
+        raise
+    return m.leaf.build(m.values)
 
 
 def complete(text: str, ctx: Any = None) -> tuple[list[str], int]:
@@ -148,7 +170,7 @@ def help_text(topic: tuple[str, ...] | list[str] = ()) -> str:
                     ok = ok and find_keyword(word, [key]) == key
                 except ValueError:
                     ok = False
-            if ok:
+            if ok and all(leaf is not other for _, other in chosen):
                 chosen.append((path, leaf))
         if not chosen:
             top = ", ".join(TREE.visible())
@@ -168,7 +190,8 @@ def help_text(topic: tuple[str, ...] | list[str] = ()) -> str:
 
 
 def _explain(leaf: Leaf) -> str:
-    return f"{leaf.syntax}\n    {leaf.summary}\n    example: {leaf.example}"
+    summary = textwrap.fill(leaf.summary, 88, initial_indent="    ", subsequent_indent="    ")
+    return f"{leaf.syntax}\n{summary}\n    example: {leaf.example}"
 
 
 def tokens_of(text: str) -> list[str]:

@@ -13,7 +13,9 @@ that reads as a number, optionally with a unit glued on (``90deg``, ``100mm``,
 
 Units (people's defaults: degrees and metres): angle ``deg`` (default), ``rad``;
 length ``m`` (default), ``mm``, ``cm``; time ``s`` (default), ``ms``; angular speed
-``deg/s`` (default), ``rad/s``.
+``deg/s`` (default), ``rad/s``; angular acceleration ``deg/s^2`` (default), ``rad/s^2``;
+tool speed ``m/s`` (default), ``mm/s``; tool acceleration ``m/s^2`` (default),
+``mm/s^2``; a fraction ``%`` (default: a number is a percentage).
 """
 
 from __future__ import annotations
@@ -50,17 +52,41 @@ UNITS: dict[str, dict[str, float]] = {
     "length": {"m": 1.0, "mm": 1e-3, "cm": 1e-2},
     "time": {"s": 1.0, "ms": 1e-3},
     "speed": {"deg/s": math.pi / 180, "rad/s": 1.0},
+    "angular_acceleration": {
+        "deg/s^2": math.pi / 180,
+        "deg/s2": math.pi / 180,
+        "rad/s^2": 1.0,
+        "rad/s2": 1.0,
+    },
+    "tool_speed": {"m/s": 1.0, "mm/s": 1e-3, "cm/s": 1e-2},
+    "tool_acceleration": {"m/s^2": 1.0, "m/s2": 1.0, "mm/s^2": 1e-3, "mm/s2": 1e-3},
+    "fraction": {"%": 0.01, "percent": 0.01},
 }
-DEFAULT_UNIT = {"angle": "deg", "length": "m", "time": "s", "speed": "deg/s"}
+DEFAULT_UNIT = {
+    "angle": "deg",
+    "length": "m",
+    "time": "s",
+    "speed": "deg/s",
+    "angular_acceleration": "deg/s^2",
+    "tool_speed": "m/s",
+    "tool_acceleration": "m/s^2",
+    "fraction": "%",
+}
 # the spellings named in messages (the others are accepted too)
 CANONICAL = {
     "angle": ("deg", "rad"),
     "length": ("m", "mm", "cm"),
     "time": ("s", "ms"),
     "speed": ("deg/s", "rad/s"),
+    "angular_acceleration": ("deg/s^2", "rad/s^2"),
+    "tool_speed": ("m/s", "mm/s"),
+    "tool_acceleration": ("m/s^2", "mm/s^2"),
+    "fraction": ("%",),
 }
 ALL_UNITS = {u for table in UNITS.values() for u in table}
-_NUMBER = re.compile(r"([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)([A-Za-z°/]*)$")
+_NUMBER = re.compile(
+    r"([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)((?:[A-Za-z°/%][A-Za-z°/%^2]*)?)$"
+)
 _SEPARATORS = " \t\r\n\f\v,()[]"
 # C0 controls but tab and newline, DEL, C1 controls, line/paragraph separators, bidi controls
 _HIDING = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u2028\u2029\u202a-\u202e\u2066-\u2069]")

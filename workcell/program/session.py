@@ -60,6 +60,19 @@ class Session:
         self.base_dir = Path(base_dir)
         self.root = None if root is None else Path(root)
         self.lock = threading.RLock()
+        self._block: tuple[Simulator, Any] | None = None
+
+    @property
+    def block(self) -> tuple[Simulator, Any] | None:
+        """The open ``concurrently_begin`` block: (its simulator, the entered context), or
+        None (a block of a simulator the session no longer runs is gone with it)."""
+        if self._block is not None and self._block[0] is not self.sim:
+            self._block = None
+        return self._block
+
+    @block.setter
+    def block(self, value: tuple[Simulator, Any] | None) -> None:
+        self._block = value
 
     @property
     def model(self) -> Model:
@@ -85,7 +98,7 @@ class Session:
         if self.cell is None:
             raise ProgramError(
                 "no cell yet: start one with 'cell new NAME', 'cell load FILE' or "
-                "'cell example joints|pick-place|handoff'"
+                "'cell example joints|pick-place|handoff|obstacle'"
             )
         return self.cell
 
@@ -146,6 +159,12 @@ class Session:
             return [r.name for r in self.model.relations(owner)]
         except WorkcellError:  # an unknown or ambiguous owner: nothing to complete
             return []
+
+    def pose_names(self, robot: str) -> list[str] | None:
+        """The named poses of ``robot`` ("home" ...), None when the robot is unknown."""
+        if self.cell is None or robot not in self.cell.robots:
+            return None
+        return list(self.cell.robots[robot].robot.poses)
 
     def joint_kinds(self, robot: str) -> list[bool] | None:
         """For each joint of ``robot``, True when revolute (None when unknown)."""

@@ -2,7 +2,8 @@
 
 On a terminal it uses prompt_toolkit: Tab completes keywords and the names the session
 knows (entities, relations, robots, parts), Up/Down walk the history (kept in a file),
-``help`` explains. When standard input is not a terminal it reads lines from it, one
+``help`` explains, ``clear`` clears the screen, ``quit`` or ``exit`` (or Ctrl-D) leaves.
+When standard input is not a terminal it reads lines from it, one
 command line at a time, the same way (this is how tests and pipes drive it). An error
 is printed with its type and the shell goes on, as the thesis's matcher returns to the
 prompt; the exit status is 1 when any command failed, else 0.
@@ -23,7 +24,8 @@ __all__ = ["BANNER", "PROMPT", "run_shell"]
 
 PROMPT = "workcell> "
 BANNER = (
-    "workcell shell: type 'help' for the commands, 'help WORDS' for one; Tab completes.\n"
+    "workcell shell: type 'help' for the commands, 'help WORDS' for one; Tab completes;\n"
+    "'quit' or 'exit' leaves.\n"
     "Angles in degrees and lengths in metres unless a unit says otherwise."
 )
 
@@ -62,7 +64,8 @@ def run_shell(
     echo: bool = False,
     interactive: bool | None = None,
 ) -> int:
-    """Run the shell on ``session`` until ``quit`` or end of input; returns the exit status.
+    """Run the shell on ``session`` until ``quit``/``exit`` or end of input; returns the exit
+    status.
 
     ``history``: the history file of the terminal prompt (None: ``~/.workcell_history``).
     ``echo``: without a terminal, print each line after the prompt before its output (a
@@ -77,13 +80,15 @@ def run_shell(
     def write(text: str) -> None:
         print(text, file=out)
 
-    interp = Interpreter(session, write)
     if interactive is None:
         interactive = stdin.isatty() and out.isatty()
-    if not interactive:
-        return _run_lines(stdin, interp, out, err, echo)
+    if not interactive:  # 'clear' does nothing in a pipe or a transcript
+        return _run_lines(stdin, Interpreter(session, write), out, err, echo)
     from prompt_toolkit import PromptSession
     from prompt_toolkit.history import FileHistory
+    from prompt_toolkit.shortcuts import clear
+
+    interp = Interpreter(session, write, clear=clear)
 
     from workcell.program.completion import WorkcellCompleter
 

@@ -26,7 +26,7 @@ from workcell.program import args as a
 if TYPE_CHECKING:
     from workcell.program.session import Session
 
-__all__ = ["ANCHORS", "Target", "part_pose", "target"]
+__all__ = ["ANCHORS", "Target", "part_pose", "target", "via_target"]
 
 ANCHORS = ("centroid", "top")
 
@@ -101,6 +101,18 @@ def target(v: object, what: str) -> Target:
 
 
 target.label = "matrix4 | target"  # type: ignore[attr-defined]
+
+
+def via_target(v: object, what: str) -> Target:
+    """A point the tool passes: 3 numbers (m, world), or a target (its position counts)."""
+    if isinstance(v, np.ndarray):
+        v = v.tolist()
+    if isinstance(v, (list, tuple)) and len(v) == 3:
+        return Target(position=a.sized(3)(v, what))
+    return _target(v, what)
+
+
+via_target.label = "number[3] | matrix4 | target"  # type: ignore[attr-defined]
 
 
 def _target(v: object, what: str) -> Target:

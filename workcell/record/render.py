@@ -8,8 +8,9 @@ Pictures show visual geometry only (collision pieces, group 3, and sites hidden;
 ``collision=True`` the collision pieces instead, each piece of a solid in its own colour), no
 shadows and no multisampling (about 15x cheaper on a CPU), a sun-like directional light
 plus the head light, and a soft sky where nothing is drawn. The default camera,
-:func:`overview_camera`, frames the visual geometry of the cell over a whole run, so
-robots and parts fill the picture without being clipped. Sizes are in pixels, times in
+:func:`~workcell.record.camera.overview_camera`, frames the visual geometry of the cell
+over a whole run, so robots and parts fill the picture without being clipped, from a side
+where no part hides behind a robot. Sizes are in pixels, times in
 seconds of simulated time.
 
 Contact sheets of key frames and MP4 videos live in :mod:`workcell.record.sheets`; their
@@ -20,9 +21,10 @@ from __future__ import annotations
 
 import copy
 import io
+import itertools
 import math
 import os
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -33,6 +35,7 @@ from numpy.typing import NDArray
 from workcell.errors import ModelError, RenderError
 from workcell.files import atomic_write_bytes
 from workcell.meshgeoms import COLLISION_GROUP, VISUAL_GROUP
+from workcell.record.camera import overview_camera
 from workcell.record.gl import free_context, open_context
 
 if TYPE_CHECKING:
@@ -171,8 +174,14 @@ class CellRenderer:
         cam.type, cam.fixedcamid = mujoco.mjtCamera.mjCAMERA_FIXED, cid
         return cam
 
-    def render(self, data: mujoco.MjData, camera: str | mujoco.MjvCamera) -> NDArray[np.uint8]:
-        """An (H, W, 3) uint8 picture of ``data`` (poses as computed by mj_forward)."""
+    def render(
+        self,
+        data: mujoco.MjData,
+        camera: str | mujoco.MjvCamera,
+        paths: Sequence[tuple[NDArray[np.float64], Sequence[float]]] = (),
+    ) -> NDArray[np.uint8]:
+        """An (H, W, 3) uint8 picture of ``data`` (poses as computed by mj_forward);
+        ``paths``: polylines drawn over the cell, each (points (k, 3) m, RGBA)."""
         if self._mjr is None:
             raise RenderError("the renderer is closed")
         cam = self.camera(camera) if isinstance(camera, str) else camera
@@ -183,6 +192,8 @@ class CellRenderer:
         self.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
         self.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = True
         self._add_grid()
+        for points, rgba in paths:
+            self._add_path(np.asarray(points, dtype=np.float64), rgba)
         self._set_lights()
         # fog (m): from just past the cell to a few extents behind it, whatever the camera
         ext = max(float(self.model.stat.extent), 0.1)
@@ -230,6 +241,28 @@ class CellRenderer:
             )
             mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_LINE, 1.0, a, b)
         scn.ngeom += n
+
+    def _add_path(self, points: NDArray[np.float64], rgba: Sequence[float]) -> None:
+        """A polyline as thin capsules (scene-only geoms), at most 400 segments."""
+        scn = self.scene
+        if len(points) > 401:
+            points = points[np.linspace(0, len(points) - 1, 401).round().astype(int)]
+        radius = 0.004 * max(float(self.model.stat.extent), 0.1)
+        colour = np.asarray(rgba, dtype=np.float32)
+        for a, b in itertools.pairwise(points):
+            if scn.ngeom >= scn.maxgeom or np.allclose(a, b):
+                continue
+            g = scn.geoms[scn.ngeom]
+            mujoco.mjv_initGeom(
+                g,
+                mujoco.mjtGeom.mjGEOM_CAPSULE,
+                np.zeros(3),
+                np.zeros(3),
+                np.eye(3).ravel(),
+                colour,
+            )
+            mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_CAPSULE, radius, a, b)
+            scn.ngeom += 1
 
     def close(self) -> None:
         """Free the GL resources (idempotent)."""
@@ -283,78 +316,6 @@ def _floor_grid(m: mujoco.MjModel) -> list[tuple[NDArray[np.float64], NDArray[np
         out.append((np.array([cx + t, cy - k * step, z]), np.array([cx + t, cy + k * step, z])))
         out.append((np.array([cx - k * step, cy + t, z]), np.array([cx + k * step, cy + t, z])))
     return out
-
-
-# ---------------------------------------------------------------------- camera
-def _visual_points(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
-    """World corners (8 per geom) of the bounding boxes of the visible non-plane geoms."""
-    keep = (
-        (model.geom_group < COLLISION_GROUP)
-        & (model.geom_type != mujoco.mjtGeom.mjGEOM_PLANE)
-        & (model.geom_rgba[:, 3] > 0)
-    )
-    idx = np.flatnonzero(keep)
-    if len(idx) == 0:
-        return np.empty((0, 3))
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-    aabb = model.geom_aabb[idx]  # centre (3), half sizes (3) in the geom frame
-    local = aabb[:, None, :3] + signs[None] * aabb[:, None, 3:]  # (k, 8, 3)
-    R = data.geom_xmat[idx].reshape(-1, 3, 3)
-    world = np.einsum("kij,kpj->kpi", R, local) + data.geom_xpos[idx][:, None, :]
-    return world.reshape(-1, 3)
-
-
-def overview_camera(
-    model: mujoco.MjModel,
-    qpos: Iterable[NDArray[np.float64]] | None = None,
-    *,
-    width: int = 640,
-    height: int = 480,
-    azimuth: float | None = None,
-    elevation: float = -24.0,
-    margin: float = 0.06,
-) -> mujoco.MjvCamera:
-    """A free camera that frames the cell's visual geometry in every pose of ``qpos``.
-
-    ``qpos``: the configurations to cover (default: ``qpos0``). The camera looks down
-    ``elevation`` degrees from a three-quarter ``azimuth`` (default: across the cell's
-    longer horizontal side); its distance and look-at point put the projected geometry
-    within ``margin`` (fraction of the half size) of the picture's edges for a
-    ``width`` x ``height`` picture with the model's vertical field of view.
-    """
-    data = mujoco.MjData(model)
-    pts = []
-    for q in [model.qpos0] if qpos is None else qpos:
-        data.qpos[:] = q
-        mujoco.mj_kinematics(model, data)
-        pts.append(_visual_points(model, data))
-    P = np.concatenate(pts) if pts else np.empty((0, 3))
-    cam = mujoco.MjvCamera()
-    mujoco.mjv_defaultFreeCamera(model, cam)
-    if len(P) == 0:
-        return cam
-    lo, hi = P.min(axis=0), P.max(axis=0)
-    if azimuth is None:
-        azimuth = 60.0 if hi[0] - lo[0] >= hi[1] - lo[1] else 150.0
-    az, el = math.radians(azimuth), math.radians(elevation)
-    f = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
-    u = np.array([-math.sin(el) * math.cos(az), -math.sin(el) * math.sin(az), math.cos(el)])
-    r = np.cross(f, u)
-    tv = math.tan(math.radians(model.vis.global_.fovy) / 2) * (1 - margin)
-    th = tv * width / height
-    c = (lo + hi) / 2
-    for i in range(6):  # fit the distance, then centre the projection; the last fit stays
-        x, y, z = (P - c) @ r, (P - c) @ u, (P - c) @ f
-        d = float(max(np.max(np.abs(x) / th - z), np.max(np.abs(y) / tv - z)))
-        if i == 5:
-            break
-        px, py = x / np.maximum(z + d, 1e-9), y / np.maximum(z + d, 1e-9)
-        c = c + (r * (px.max() + px.min()) + u * (py.max() + py.min())) / 2 * d
-    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-    cam.lookat[:] = c
-    cam.distance = d
-    cam.azimuth, cam.elevation = azimuth, elevation
-    return cam
 
 
 # ---------------------------------------------------------------------- frames

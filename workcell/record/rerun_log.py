@@ -19,6 +19,9 @@ Layout of the recording (entity paths; names escaped with ``rr.escape_entity_pat
 - ``/joints/{robot}``: the robot's joint values, one named series per joint (``Scalars``
   with one value per joint, in DH order): **degrees** for revolute joints, metres for
   prismatic ones (each series name says its unit, e.g. ``"j2 (deg)"``);
+- ``/joint_speeds/{robot}`` and ``/joint_accelerations/{robot}``: their finite-difference
+  speeds (deg/s, m/s) and accelerations (deg/s^2, m/s^2), shown in tabs beside the angles
+  (:mod:`workcell.record.rr_rates`);
 - ``/gripper/{robot}``: 1 while the robot holds a part (from its ``grasp`` event to its
   ``release`` event), else 0; logged at the changes, the start and the end;
 - ``/events``: every timeline event as a ``TextLog`` (``error``: ERROR, ``collision``:
@@ -31,6 +34,12 @@ simulated clock; frames may share one, e.g. under joint-by-joint mode's thesis c
 wall time; an event without a frame (-1) on the last frame whose simulated time is <= its
 time.
 
+Frames kept: by default 60 per simulated second (``fps``; :func:`kept_frames`): the first
+frame at or after each 1/60 s, the first and last frames, and every event's frame, so a
+1 kHz run makes a file 1/16 the size while grasps, releases, collisions and errors show
+at their exact frame, pose and time (``fps=None`` keeps every frame). Frames that share
+one simulated time (joint-by-joint mode's thesis clock) keep only the first.
+
 Body poses come from ``mujoco.mj_kinematics`` on the frame's full ``qpos`` in a scratch
 ``MjData`` (the simulator's own data is not touched). The timeline is read block by block
 (:meth:`~workcell.sim.timeline.Timeline.iter_blocks`, spilled blocks included) and sent in
@@ -40,6 +49,7 @@ batches of ``chunk_frames`` frames with ``send_columns``, so memory stays bounde
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import sys
 import time
@@ -58,6 +68,7 @@ from tqdm import tqdm
 
 from workcell.errors import RecordError
 from workcell.files import atomic_path, check_writable
+from workcell.record.rr_rates import Rates, acceleration_entity, speed_entity
 from workcell.record.rr_scene import (
     EVENTS,
     GRIPPERS,
@@ -79,6 +90,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_CHUNK_FRAMES",
+    "DEFAULT_FPS",
     "RecordError",
     "RecordStats",
     "body_entity",
@@ -86,12 +98,14 @@ __all__ = [
     "default_blueprint",
     "gripper_entity",
     "joint_entity",
+    "kept_frames",
     "log_timeline",
     "record",
     "tool_path_entity",
 ]
 
 DEFAULT_CHUNK_FRAMES = 8192
+DEFAULT_FPS = 60.0  # frames per simulated second a recording keeps (events exact)
 DEFAULT_PORT = 9876
 _LEVELS = {"error": "ERROR", "collision": "WARN", "grasp": "INFO", "release": "INFO"}
 _LEVELS |= {"move": "DEBUG", "wait": "DEBUG", "speed": "DEBUG"}
@@ -138,13 +152,17 @@ class _Frames:
         m = self.m = sim.model
         self.rec, self.layout, self.d = rec, layout, mujoco.MjData(m)  # scratch, not sim.data
         self.rows = np.empty((chunk, 2 + m.nq))
+        self.index = np.empty(chunk, dtype=np.int64)  # each buffered row's frame index
         self.xpos, self.xquat = np.empty((chunk, m.nbody, 3)), np.empty((chunk, m.nbody, 4))
         self.sites = np.empty((chunk, m.nsite, 3))
-        self.n = self.first = 0  # frames buffered; frame index of the first one
+        self.n = 0  # frames buffered
         self.tool_end: dict[str, Array] = {}  # last tool point sent, per robot
+        self.robots = list(sim.robots)  # in the order of layout.joints
+        self.rates = Rates()  # joint speeds and accelerations, carried across batches
 
-    def add(self, rows: Array) -> None:
-        """Append timeline rows ``[sim_time, wall_time, *qpos]``, sending when full."""
+    def add(self, rows: Array, index: NDArray[np.int64]) -> None:
+        """Append timeline rows ``[sim_time, wall_time, *qpos]`` of frames ``index``,
+        sending when full."""
         m, d, kin = self.m, self.d, mujoco.mj_kinematics
         qpos, xpos, xquat, sites = d.qpos, d.xpos, d.xquat, d.site_xpos
         XP, XQ, SP = self.xpos, self.xquat, self.sites
@@ -152,6 +170,7 @@ class _Frames:
             k0 = self.n
             take = min(len(self.rows) - k0, len(rows))
             piece, rows = rows[:take], rows[take:]
+            self.index[k0 : k0 + take], index = index[:take], index[take:]
             for k, q in enumerate(piece[:, 2:], start=k0):
                 qpos[:] = q
                 kin(m, d)
@@ -169,7 +188,7 @@ class _Frames:
         if n == 0:
             return
         rec, rows = self.rec, self.rows[:n]
-        idx = index_columns(np.arange(self.first, self.first + n), rows[:, 0], rows[:, 1])
+        idx = index_columns(self.index[:n], rows[:, 0], rows[:, 1])
         bodies = [b for b, _ in self.layout.moving]
         # float32 (what rerun stores), body-major so each body's rows are contiguous
         pos = np.ascontiguousarray(self.xpos[:n, bodies].transpose(1, 0, 2), dtype=np.float32)
@@ -178,17 +197,18 @@ class _Frames:
         for i, (_, ent) in enumerate(self.layout.moving):
             cols = rr.Transform3D.columns(translation=pos[i], quaternion=quat[i])
             rec.send_columns(ent, indexes=idx, columns=cols)
-        for ent, adr, revolute, _ in self.layout.joints:
+        for robot, (ent, adr, revolute, _) in zip(self.robots, self.layout.joints, strict=True):
             q = rows[:, 2 + adr]
-            q = np.where(revolute, np.degrees(q), q).reshape(-1)
-            cols = rr.Scalars.columns(scalars=q).partition(np.full(n, len(adr)))
-            rec.send_columns(ent, idx, cols)
+            v, a = self.rates.rows(robot, rows[:, 0], q)
+            for e, x in ((ent, q), (speed_entity(robot), v), (acceleration_entity(robot), a)):
+                x = np.where(revolute, np.degrees(x), x).reshape(-1)
+                cols = rr.Scalars.columns(scalars=x).partition(np.full(n, len(adr)))
+                rec.send_columns(e, idx, cols)
         for robot, site, ent in self.layout.tools:
             P = self.sites[:n, site]
             prev = np.concatenate([self.tool_end.get(robot, P[:1]), P[:-1]])
             self.tool_end[robot] = P[-1:].copy()
             rec.send_columns(ent, idx, rr.LineStrips3D.columns(strips=_segments(prev, P)))
-        self.first += n
         self.n = 0
         rec.flush()  # let the sinks catch up: unwritten batches would pile up in memory
 
@@ -224,11 +244,21 @@ def _log_events(
         )
 
 
+def _check_fps(fps: object) -> None:
+    if fps is not None and not (
+        isinstance(fps, (int, float)) and not isinstance(fps, bool) and 0 < fps <= 1e6
+    ):
+        raise RecordError(
+            f"fps must be a number of frames per simulated second in (0, 1e6], or None for "
+            f"every frame; got {fps!r}"
+        )
+
+
 # ---------------------------------------------------------------------- public
 def default_blueprint(robots: Sequence[str], *, grippers: bool = True) -> rrb.Blueprint:
-    """The default layout: the 3D cell (tool paths drawn up to the cursor) beside one joint
-    plot per robot, the gripper states (with ``grippers``) and the event log; the time
-    panel on ``sim_time``."""
+    """The default layout: the 3D cell (tool paths drawn up to the cursor) beside, per
+    robot, tabs of its joint angles, speeds and accelerations, the gripper states (with
+    ``grippers``) and the event log; the time panel on ``sim_time``."""
     trail = rrb.VisibleTimeRanges(
         timeline="sim_time",
         start=rrb.TimeRangeBoundary.infinite(),
@@ -238,7 +268,13 @@ def default_blueprint(robots: Sequence[str], *, grippers: bool = True) -> rrb.Bl
         origin=WORLD, name="Workcell", overrides={tool_path_entity(r): trail for r in robots}
     )
     plots = [
-        rrb.TimeSeriesView(origin=f"{JOINTS}/{entity_part(r)}", name=f"{r} joints (deg)")
+        rrb.Tabs(
+            rrb.TimeSeriesView(origin=f"{JOINTS}/{entity_part(r)}", name=f"{r} joints (deg)"),
+            rrb.TimeSeriesView(origin=speed_entity(r), name=f"{r} joint speeds (deg/s)"),
+            rrb.TimeSeriesView(
+                origin=acceleration_entity(r), name=f"{r} joint accelerations (deg/s^2)"
+            ),
+        )
         for r in robots
     ]
     side = rrb.Vertical(
@@ -252,21 +288,44 @@ def default_blueprint(robots: Sequence[str], *, grippers: bool = True) -> rrb.Bl
     )
 
 
+def kept_frames(
+    times: Array, fps: float | None, must: NDArray[np.int64] | None = None
+) -> NDArray[np.bool_]:
+    """Which frames a recording at ``fps`` keeps (a mask over ``times``, the frames'
+    simulated times, s): the first frame at or after each multiple of 1/fps from the first
+    frame's time, the first and last frames, and the frames in ``must`` (the events'
+    frames, so every event shows at its exact pose and time). ``fps`` None: every frame."""
+    n = len(times)
+    if fps is None or n == 0:
+        return np.ones(n, dtype=bool)
+    keep = np.zeros(n, dtype=bool)
+    samples = times[0] + np.arange(math.floor((times[-1] - times[0]) * fps + 1e-9) + 1) / fps
+    keep[np.minimum(np.searchsorted(times, samples - 1e-9, side="left"), n - 1)] = True
+    keep[[0, n - 1]] = True
+    if must is not None and len(must):
+        keep[must] = True
+    return keep
+
+
 def log_timeline(
     rec: rr.RecordingStream,
     sim: Simulator,
     *,
+    fps: float | None = DEFAULT_FPS,
     chunk_frames: int = DEFAULT_CHUNK_FRAMES,
     progress: bool | None = None,
 ) -> RecordStats:
     """Log ``sim``'s whole timeline into ``rec`` (see the module doc for the layout).
 
-    ``chunk_frames``: frames per ``send_columns`` batch (memory ~ 1.4 kB per frame for a
-    two-robot cell); ``progress``: a tqdm bar on stderr (None: only on a terminal and for
-    more than 50,000 frames). Returns what was logged (``path``/``bytes`` None).
+    ``fps``: frames per simulated second to keep (:func:`kept_frames`: events keep their
+    exact frames; None: every frame); ``chunk_frames``: frames per ``send_columns`` batch
+    (memory ~ 1.4 kB per frame for a two-robot cell); ``progress``: a tqdm bar on stderr
+    (None: only on a terminal and for more than 50,000 frames). Returns what was logged
+    (``path``/``bytes`` None).
     """
     if not (isinstance(chunk_frames, (int, np.integer)) and chunk_frames >= 1):
         raise RecordError(f"chunk_frames must be an integer >= 1, got {chunk_frames!r}")
+    _check_fps(fps)
     c0 = time.perf_counter()
     tl = sim.timeline
     layout = Layout.of(sim)
@@ -278,29 +337,29 @@ def log_timeline(
     d0.qpos[:] = q0
     mujoco.mj_kinematics(sim.model, d0)
     log_static(rec, sim, layout, d0)
+    for robot, (_, _, _, labels) in zip(sim.robots, layout.joints, strict=True):
+        Rates.log_static(rec, robot, labels)
     events = tl.events
+    times = tl.sim_times()
     te = np.array([e.t for e in events])
     ef = np.array([getattr(e, "frame", -1) for e in events], dtype=np.int64)
-    known = ef >= 0
-    ev_frame = np.zeros(len(events), dtype=np.int64)
-    ev_wall = np.zeros(len(events))
+    # each event's own frame, else the last one whose sim_time <= its t
+    by_time = np.maximum(np.searchsorted(times, te, side="right") - 1, 0)
+    ev_frame = np.where(ef >= 0, np.minimum(ef, n - 1), by_time).astype(np.int64)
+    ev_wall = tl.wall_times()[ev_frame] if len(events) else np.zeros(0)
+    keep = kept_frames(times, fps, ev_frame)
     frames = _Frames(rec, sim, layout, int(chunk_frames))
     show = progress if progress is not None else (sys.stderr.isatty() and n > 50_000)
     last = first = (0, t0, w0)
     with tqdm(total=n, unit="frame", desc="record", leave=False, disable=not show) as bar:
         for start, rows in tl.iter_blocks():
-            frames.add(rows)
-            if len(te):  # each event's own frame, else the last one with sim_time <= its t
-                k = np.searchsorted(rows[:, 0], te, side="right") - 1
-                k = np.where(known, ef - start, k)
-                hit = (k >= 0) & (k < len(rows))
-                ev_frame[hit] = start + k[hit]
-                ev_wall[hit] = rows[k[hit], 1]
+            mine = keep[start : start + len(rows)]
+            frames.add(rows[mine], np.flatnonzero(mine) + start)
             last = (start + len(rows) - 1, float(rows[-1, 0]), float(rows[-1, 1]))
             bar.update(len(rows))
         frames.flush()
     _log_events(rec, sim, layout, ev_frame, ev_wall, first, last)
-    return RecordStats(n, len(events), len(layout.moving), time.perf_counter() - c0)
+    return RecordStats(int(keep.sum()), len(events), len(layout.moving), time.perf_counter() - c0)
 
 
 def _spawn_viewer(port: int) -> str:
@@ -326,6 +385,7 @@ def record(
     spawn: bool = False,
     connect: str | None = None,
     port: int = DEFAULT_PORT,
+    fps: float | None = DEFAULT_FPS,
     chunk_frames: int = DEFAULT_CHUNK_FRAMES,
     progress: bool | None = None,
     application_id: str = "workcell",
@@ -341,8 +401,9 @@ def record(
     complete); ``spawn``: start a viewer on ``port`` and stream to it; ``connect``: stream
     to a running viewer's gRPC URL (e.g. ``"rerun+http://127.0.0.1:9876/proxy"``).
     Times: simulated and wall clocks as ns durations, ``frame`` as a sequence; lengths in
-    metres, joint angles in degrees. ``chunk_frames`` and ``progress``: see
-    :func:`log_timeline`. ``recording_id``: default a fresh UUID. ``images_fps``: also
+    metres, joint angles in degrees. ``fps`` (frames kept per simulated second, default
+    60; every event's frame is kept, so events show at their exact pose and time; None:
+    every frame), ``chunk_frames`` and ``progress``: see :func:`log_timeline`. ``recording_id``: default a fresh UUID. ``images_fps``: also
     render the run every 1/images_fps simulated seconds from ``image_camera`` (default:
     the overview) at ``image_size`` (width, height pixels) and log the pictures (see
     :mod:`workcell.record.rr_images`). Returns a :class:`RecordStats` (``path`` and
@@ -359,6 +420,7 @@ def record(
         isinstance(images_fps, (int, float)) and 0 < images_fps < 1000
     ):
         raise RecordError(f"images_fps must be a number in (0, 1000) per s, got {images_fps!r}")
+    _check_fps(fps)
     if not (isinstance(port, int) and 0 < port < 65536):
         raise RecordError(f"port must be an integer in 1..65535, got {port!r}")
     target = None if path is None else check_recording_path(path)  # before the work
@@ -374,7 +436,7 @@ def record(
             sinks += [rr.GrpcSink(_spawn_viewer(port))] if spawn else []
             sinks += [rr.GrpcSink(connect)] if connect is not None else []
             rec.set_sinks(*sinks, default_blueprint=bp)
-            stats = log_timeline(rec, sim, chunk_frames=chunk_frames, progress=progress)
+            stats = log_timeline(rec, sim, fps=fps, chunk_frames=chunk_frames, progress=progress)
             if images_fps is not None:
                 from workcell.record.rr_images import log_images
 

@@ -40,7 +40,9 @@ __all__ = [
     "video_frames",
 ]
 
-KEY_EVENT_KINDS = ("move", "grasp", "release", "wait", "open", "close", "line", "path")
+KEY_EVENT_KINDS = (
+    "move", "grasp", "release", "wait", "open", "close", "line", "path", "collision", "error"
+)  # fmt: skip
 
 
 # ---------------------------------------------------------------------- contact sheet
@@ -56,7 +58,9 @@ class KeyFrame(NamedTuple):
 
 
 def key_frames(sim: Simulator, kinds: Sequence[str] = KEY_EVENT_KINDS) -> list[KeyFrame]:
-    """Frame 0 and the end of each command (events of ``kinds``), in order.
+    """Frame 0 and the end of each command (events of ``kinds``), in order: by default
+    also each collision (its first overlapping frame) and the error a run stopped on (the
+    state the failing command found).
 
     An event maps to its ``frame`` (the last frame when it was recorded), exact in every
     mode, or, for events without one, to the last frame whose simulated time is at most
@@ -71,7 +75,10 @@ def key_frames(sim: Simulator, kinds: Sequence[str] = KEY_EVENT_KINDS) -> list[K
         if i < 0:
             i = max(int(np.searchsorted(times, e.t + 1e-9, side="right")) - 1, 0)
         command, _, rest = e.detail.partition(" ")
-        if not command.isidentifier():
+        if e.kind == "error":  # "JointLimitError: message"
+            kind, _, rest = e.detail.partition(": ")
+            command = f"error: {kind}"
+        elif e.kind == "collision" or not command.isidentifier():
             command, rest = e.kind, e.detail
         title = f"{e.robot}: {command}" if e.robot else command
         out.append(KeyFrame(i, float(times[i]), title, rest))

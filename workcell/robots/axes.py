@@ -10,19 +10,26 @@ robot's at random joint values. Lengths in m, angles in rad.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell.errors import KinematicsError
 from workcell.robots.robot import Robot
+from workcell.spatial import invert
 
 __all__ = [
     "GEOMETRY_TOL",
     "VERIFY_TOL",
+    "AxisModel",
     "axis_lines",
     "base_frame",
+    "fitted",
     "line_gap",
     "straight_value",
     "verify_fk",
@@ -34,6 +41,42 @@ GEOMETRY_TOL = 1e-9
 VERIFY_TOL = 1e-9
 """m and rotation-matrix entries: a family's FK must match the robot's this closely."""
 VERIFY_SAMPLES = 64  # random joint vectors compared (plus q = 0)
+
+
+@dataclass(frozen=True, eq=False)
+class AxisModel:
+    """What every family model has: joint ``offsets`` (rad) and ``signs`` mapping joint
+    values to the model's angles, ``q_i = sign_i (theta_i + offset_i)``; ``base`` (4x4)
+    the model's base frame in frame 0 of the chain; ``end`` (4x4) the robot's tool frame
+    in the model's end frame."""
+
+    offsets: tuple[float, ...]
+    signs: tuple[int, ...]
+    base: Array
+    end: Array
+
+    def theta(self, Q: Array) -> Array:
+        """The model's angles (..., 6) of joint values Q (rad): ``sign * q - offset``."""
+        return np.asarray(Q) * np.array(self.signs) - np.array(self.offsets)
+
+
+M = TypeVar("M", bound=AxisModel)
+
+
+def fitted(robot: Robot, draft: M, fk: Callable[[M, Array], Array], where: str) -> M:
+    """``draft`` (its ``end`` the identity) with the ``end`` that puts its end frame on
+    the robot's tool frame at q = 0, trusted only when its FK then matches the robot's
+    (:func:`verify_fk` within ``VERIFY_TOL``); KinematicsError saying by how much not."""
+    zero = fk(draft, np.zeros((1, robot.dof)))[0]
+    end = invert(zero) @ np.linalg.inv(robot.base) @ robot.fk(np.zeros(robot.dof))
+    model = dataclasses.replace(draft, end=end)
+    err = verify_fk(robot, lambda Q: fk(model, Q))
+    if err > VERIFY_TOL:
+        raise KinematicsError(
+            f"{where}: the model read from its axes misses its FK by {err:.3g} (m or rotation "
+            "entries) at random joint values"
+        )
+    return model
 
 
 def axis_lines(robot: Robot, q: Array | None = None) -> tuple[Array, Array]:

@@ -28,9 +28,10 @@ Each solution's q is the in-limit 2 pi-representative of every joint (nearest to
 out per joint, the same bits); a joint without one leaves q wrapped to (-pi, pi] with
 ``within_limits=False``. Every returned q is checked by the family's own FK in floats
 (the robot's numpy chain when base or tool is rigid only to within 1e-9): ``success``
-needs position and orientation errors below 1e-9. Singular solutions are flagged:
-|sin theta5| < 1e-6 (wrist), a wrist point on axis 1 (shoulder: q1 taken from
-``q_current``). At an aligned wrist (|sin theta5| < 1e-12) q4 is the current q4 (or 0)
+needs position and orientation errors below 1e-9. Singular solutions are flagged: the
+wrist (|sin theta5| < 1e-6), the shoulder (the wrist point within 1e-6 (relative) of
+the boundary between the l and r branches; on axis 1 itself q1 is taken from
+``q_current``) and the elbow (the arm stretched or folded to within 1e-6 rad). At an aligned wrist (|sin theta5| < 1e-12) q4 is the current q4 (or 0)
 and q6 is solved so the pose stays exact.
 """
 

@@ -49,12 +49,12 @@ from numpy.typing import NDArray
 from workcell.errors import KinematicsError
 from workcell.robots.axes import (
     GEOMETRY_TOL,
-    VERIFY_TOL,
+    AxisModel,
     axis_lines,
     base_frame,
+    fitted,
     line_gap,
     straight_value,
-    verify_fk,
 )
 from workcell.robots.robot import Robot
 from workcell.spatial import invert
@@ -65,10 +65,10 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
-class OPWModel:
-    """The seven OPW parameters of a robot (m), its joint offsets (rad) and signs, and
-    the frames that place the model: ``base`` (W, 4x4) in frame 0 of the chain and
-    ``end`` (4x4) the robot's tool frame in the wrist-centre frame (module doc)."""
+class OPWModel(AxisModel):
+    """The seven OPW parameters of a robot (m), with :class:`AxisModel`'s joint offsets
+    (rad) and signs and the frames that place the model: ``base`` (W) in frame 0 of the
+    chain and ``end`` the robot's tool frame in the wrist-centre frame (module doc)."""
 
     a1: float
     a2: float
@@ -76,20 +76,12 @@ class OPWModel:
     c1: float
     c2: float
     c3: float
-    offsets: tuple[float, ...]
-    signs: tuple[int, ...]
-    base: Array
-    end: Array
     family: str = "opw"
 
     @property
     def c4(self) -> float:
         """Wrist centre to the tool frame along axis 6 (m): ``end[2, 3]``."""
         return float(self.end[2, 3])
-
-    def theta(self, Q: Array) -> Array:
-        """OPW angles (..., 6) of joint values Q (rad): ``sign * q - offset``."""
-        return np.asarray(Q) * np.array(self.signs) - np.array(self.offsets)
 
     def parameters(self) -> dict[str, float]:
         """The seven parameters by their published names (m)."""
@@ -211,16 +203,8 @@ def opw_model(robot: Robot) -> OPWModel:
     signs = (s1, _sign(float(u[1] @ y)), _sign(float(u[2] @ y)), s4, 1, s6)
     theta0 = (phi1, t2, t23 - t2, t4, -q5, 0.0)  # OPW angles at q = 0 (theta5 = -q5)
     offsets = tuple(-t for t in theta0)
-    draft = OPWModel(a1, a2, float(b), c1, c2, c3, offsets, signs, W, np.eye(4))
-    # the tool frame in the wrist-centre frame, from q = 0
-    zero = opw_fk(draft, np.zeros((1, 6)))[0]
-    flange = np.linalg.inv(robot.base) @ robot.fk(np.zeros(6))
-    end = invert(zero) @ flange
-    model = OPWModel(a1, a2, float(b), c1, c2, c3, offsets, signs, W, end)
-    err = verify_fk(robot, lambda Q: opw_fk(model, Q))
-    if err > VERIFY_TOL:
-        raise KinematicsError(
-            f"{where}: the OPW model read from its axes misses its FK by {err:.3g} (m or "
-            "rotation entries) at random joint values"
-        )
-    return model
+    draft = OPWModel(
+        offsets=offsets, signs=signs, base=W, end=np.eye(4),
+        a1=a1, a2=a2, b=float(b), c1=c1, c2=c2, c3=c3,
+    )  # fmt: skip
+    return fitted(robot, draft, opw_fk, where)

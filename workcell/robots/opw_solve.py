@@ -97,6 +97,7 @@ def solve_one(
     cc = c2 * c2 + L * L
     out: list[Solution] = []
     reasons: list[str] = []
+    shoulder = shoulder_free or xs < SINGULAR_TOL * max(sqrt(r2), 1e-300)
     maybe_dup = shoulder_free or xs < DEGENERATE * max(sqrt(r2), 1e-300)
     for right in (False, True):
         x = xs if right else -xs
@@ -111,6 +112,7 @@ def solve_one(
                 continue
             ck = 1.0 if ck > 1.0 else -1.0  # on the boundary, up to rounding
         kappa = math.acos(ck)
+        elbow = min(kappa, _PI - kappa) < SINGULAR_TOL  # stretched or folded
         if min(kappa, _PI - kappa) < DEGENERATE:
             maybe_dup = True
         phv = atan2(u, v)
@@ -132,7 +134,7 @@ def solve_one(
                 t4, t5 = atan2(m12, m02), atan2(s5abs, m22)
             c4, s4, c5, sn5 = cos(t4), sin(t4), cos(t5), sin(t5)
             t6 = atan2(-s4 * m00 + c4 * m10, c5 * (c4 * m00 + s4 * m10) - sn5 * m20)
-            singular = s5abs < SINGULAR_TOL or shoulder_free
+            singular = s5abs < SINGULAR_TOL or shoulder or elbow
             slot = 4 * right + 2 * (not up)
             first = (t1, t2, t23 - t2, t4, t5, t6)
             if s5abs < ALIGNED_TOL:

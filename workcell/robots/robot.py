@@ -177,8 +177,12 @@ class Robot:
     def _vector(self, q: ArrayLike, what: str = "q") -> Array:
         v = np.asarray(q, dtype=np.float64)
         if v.shape != (self.dof,) or not np.all(np.isfinite(v)):
+            got = f"{v.size} value(s)" if v.ndim == 1 else f"an array of shape {v.shape}"
+            if v.shape == (self.dof,):
+                got = "a value that is not finite"
             raise KinematicsError(
-                f"robot '{self.name}': {what} must be {self.dof} finite numbers, got {q!r}"
+                f"robot '{self.name}': {what} must be {self.dof} finite numbers (one per "
+                f"joint), got {got}"
             )
         return v
 

@@ -32,12 +32,12 @@ from numpy.typing import NDArray
 from workcell.errors import KinematicsError
 from workcell.robots.axes import (
     GEOMETRY_TOL,
-    VERIFY_TOL,
+    AxisModel,
     axis_lines,
     base_frame,
+    fitted,
     line_gap,
     straight_value,
-    verify_fk,
 )
 from workcell.robots.robot import Robot
 from workcell.spatial import invert
@@ -48,20 +48,17 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
-class URModel:
-    """UR DH lengths (m), joint offsets (rad) and signs, the frames ``base`` (W) and
-    ``end`` (module doc), ``forward`` (+1 or -1: the arm faces +x1 or -x1 at q = 0) and
-    ``straight`` (+1 or -1: the straight wrist has theta5 = 0 or pi)."""
+class URModel(AxisModel):
+    """UR DH lengths (m), with :class:`AxisModel`'s joint offsets (rad) and signs and
+    the frames ``base`` (W) and ``end`` (module doc); ``forward`` (+1 or -1: the arm
+    faces +x1 or -x1 at q = 0) and ``straight`` (+1 or -1: the straight wrist has
+    theta5 = 0 or pi)."""
 
     d1: float
     a2: float
     a3: float
     d4: float
     d5: float
-    offsets: tuple[float, ...]
-    signs: tuple[int, ...]
-    base: Array
-    end: Array
     forward: int = 1
     straight: int = 1
     family: str = "ur"
@@ -70,10 +67,6 @@ class URModel:
     def d6(self) -> float:
         """The meeting point of axes 5 and 6 to the tool frame along axis 6 (m)."""
         return float(self.end[2, 3])
-
-    def theta(self, Q: Array) -> Array:
-        """DH angles (..., 6) of joint values Q (rad): ``sign * q - offset``."""
-        return np.asarray(Q) * np.array(self.signs) - np.array(self.offsets)
 
     def parameters(self) -> dict[str, float]:
         """The DH lengths by UR's names (m)."""
@@ -178,14 +171,8 @@ def ur_model(robot: Robot) -> URModel:
     theta0 = (t1, t2, t23 - t2, t4, -plus, 0.0)
     offsets = tuple(-t for t in theta0)
     forward = 1 if (p56 - p1) @ x1 >= 0 else -1
-    draft = URModel(d1, a2, a3, d4, d5, offsets, signs, W, np.eye(4), forward, straight)
-    zero = ur_fk(draft, np.zeros((1, 6)))[0]
-    end = invert(zero) @ np.linalg.inv(robot.base) @ robot.fk(np.zeros(6))
-    model = URModel(d1, a2, a3, d4, d5, offsets, signs, W, end, forward, straight)
-    err = verify_fk(robot, lambda Q: ur_fk(model, Q))
-    if err > VERIFY_TOL:
-        raise KinematicsError(
-            f"{where}: the UR model read from its axes misses its FK by {err:.3g} (m or "
-            "rotation entries) at random joint values"
-        )
-    return model
+    draft = URModel(
+        offsets=offsets, signs=signs, base=W, end=np.eye(4),
+        d1=d1, a2=a2, a3=a3, d4=d4, d5=d5, forward=forward, straight=straight,
+    )  # fmt: skip
+    return fitted(robot, draft, ur_fk, where)

@@ -69,6 +69,7 @@ def solve_one(
     hs = sqrt(h2) if h2 > 0.0 else 0.0
     free = r2 < REACH_TOL * REACH_TOL
     psi = ref[0] if free and ref is not None else (0.0 if free else atan2(py, px))
+    shoulder = free or hs < SINGULAR_TOL * max(sqrt(r2), 1e-300)
     maybe_dup = free or hs < DEGENERATE * max(sqrt(r2), 1e-300)
     found: dict[int, tuple[tuple[float, ...], bool]] = {}
     reason = ""
@@ -101,6 +102,7 @@ def solve_one(
                     continue
                 D = 1.0 if D > 1.0 else -1.0
             k = math.acos(D)
+            elbow = min(k, _PI - k) < SINGULAR_TOL  # stretched or folded
             if min(k, _PI - k) < DEGENERATE:
                 maybe_dup = True
             x4x = c5 * c6 * r00 - c5 * s6 * r01 - sn5 * r02
@@ -108,7 +110,7 @@ def solve_one(
             x4z = c5 * c6 * r20 - c5 * s6 * r21 - sn5 * r22
             t234 = atan2(x4z, x4x * c1 + x4y * s1)
             flip = not aligned and st * sn5 > 0.0
-            singular = s5abs < SINGULAR_TOL or free
+            singular = s5abs < SINGULAR_TOL or shoulder or elbow
             for t3 in (k, -k):
                 t2 = atan2(v, u) - atan2(a3 * sin(t3), a2 + a3 * cos(t3))
                 up = _elbow_up(f, u, v, a2 * cos(t2), a2 * sin(t2))

@@ -20,7 +20,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
@@ -39,13 +39,15 @@ Array = NDArray[np.float64]
 @dataclass(frozen=True)
 class PlannedMove:
     """One command planned inside a block: ``robot``'s ``times`` (k,) (s, simulated) and
-    joint ``rows`` (k, dof), with the text of its ``move`` event."""
+    joint ``rows`` (k, dof), with the text of its ``move`` event and its cycle-time
+    ``record``."""
 
     robot: str
     times: Array
     rows: Array
     command: str
     detail: str
+    record: dict[str, Any] | None = None
 
 
 @dataclass
@@ -72,6 +74,7 @@ class ConcurrentCommands:
                 "playback mode"
             )
         self._block = _Block(self.sim_time, self.data.qpos.copy())
+        self._pending.clear()  # a block starts from rest (zones do not reach into it)
         try:
             with self._transaction():
                 yield
@@ -79,6 +82,7 @@ class ConcurrentCommands:
                 self._merge(block)
         finally:
             self._block = None
+            self._pending.clear()  # nor out of it
 
     # ------------------------------------------------------------------ internals
     def _not_in_block(self: Simulator, command: str) -> None:
@@ -101,13 +105,14 @@ class ConcurrentCommands:
         rows: Array | Callable[[int, int], Array],
         command: str,
         detail: str,
+        record: dict[str, Any] | None = None,
     ) -> None:
         """Keep a planned move for the block's end; the robot is left at its target."""
         if len(times) == 0:
             return
         self._carried(robot)  # refuse now if the robot may not move
         Q = rows(0, len(times)) if callable(rows) else np.asarray(rows)
-        self._block.moves.append(PlannedMove(robot, times, Q, command, detail))
+        self._block.moves.append(PlannedMove(robot, times, Q, command, detail, record))
         self._block.clocks[robot] = float(times[-1])
         self.data.qpos[self._qadr[robot]] = Q[-1]
         mujoco.mj_kinematics(self.model, self.data)
@@ -143,6 +148,7 @@ class ConcurrentCommands:
                 "move",
                 f"{mv.command} {mv.detail}: {len(mv.times)} frames, "
                 f"{mv.times[-1] - self._block_start(mv, block):.6g} s (concurrent)",
+                data=mv.record,
             )
 
     def _block_start(self: Simulator, mv: PlannedMove, block: _Block) -> float:

@@ -13,8 +13,9 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from workcell.checks import is_finite_number
+from workcell.checks import is_finite_number, quote_angle, quote_length
 from workcell.errors import GraspError, ProgramError
+from workcell.sim.cycle import command_record
 from workcell.sim.grasp import PartBox, describe_failure, grasp_candidates
 from workcell.spatial import invert, pos_quat_from_pose
 
@@ -92,9 +93,12 @@ class GripperCommands:
         name = self._robot(robot)
         self._not_in_block("close_gripper")
         self._gripper_id(name, "close_gripper")
-        for what, v in (("max_distance", max_distance), ("max_angle", max_angle)):
+        for what, v, quote in (
+            ("max_distance", max_distance, quote_length),
+            ("max_angle", max_angle, quote_angle),
+        ):
             if not (is_finite_number(v) and v >= 0):
-                raise ProgramError(f"close_gripper '{name}': {what} must be >= 0, got {v!r}")
+                raise ProgramError(f"close_gripper '{name}': {what} must be >= 0, got {quote(v)}")
         if name in self._holds:
             raise GraspError(f"close_gripper '{name}': already holds '{self._holds[name].part}'")
         gripper = self.cell.robots[name].robot.gripper
@@ -137,14 +141,18 @@ class GripperCommands:
                 "grasp",
                 f"grasp '{part}': axis {math.degrees(chosen.angle):.3g} deg, width "
                 f"{chosen.width * 1e3:.4g} mm, distance {chosen.distance * 1e3:.3g} mm",
+                data=command_record(name, "close_gripper", self.sim_time, 0.0),
             )
         return part
 
-    def open_gripper(self, robot: str) -> str | None:
+    def open_gripper(self, robot: str, *, settle: bool = False) -> str | None:
         """Open the robot's gripper; release the part it holds (returned; None if empty).
 
         A released part stays where it is, unless another robot holds it too (a handoff):
-        that robot carries it from now on.
+        that robot carries it from now on. Released in mid-air (more than the contact
+        tolerance above what is below it), it gets a ``warning`` event; with ``settle`` it
+        drops straight onto the highest support below it instead, in one frame
+        (:mod:`workcell.plan.resting`).
         """
         name = self._robot(robot)
         self._not_in_block("open_gripper")
@@ -170,17 +178,25 @@ class GripperCommands:
                         hold.quat,
                     )
                 )
+            rec = command_record(name, "open_gripper", self.sim_time, 0.0)
             if hold is None:
-                self.timeline.add_event(self.sim_time, name, "open", "open_gripper: nothing held")
+                self.timeline.add_event(
+                    self.sim_time, name, "open", "open_gripper: nothing held", data=rec
+                )
             else:
                 others = self._holders[hold.part]
                 to = f", now carried by '{others[0]}'" if others else ""
                 where = ", ".join(
-                    f"{round(v, 4) + 0.0:.4f}" for v in self.part_pose(hold.part)[:3, 3]
+                    f"{round(v, 4) + 0.0:.4f}" for v in self.part_positions()[hold.part]
                 )
                 self.timeline.add_event(
-                    self.sim_time, name, "release", f"release '{hold.part}' at ({where}) m{to}"
+                    self.sim_time,
+                    name,
+                    "release",
+                    f"release '{hold.part}': centroid ({where}) m{to}",
+                    data=rec,
                 )
+                self._after_release(name, hold.part, bool(settle))
         return None if hold is None else hold.part
 
     def _gripper_id(self, name: str, command: str) -> int:

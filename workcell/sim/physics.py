@@ -10,9 +10,11 @@ clock, joints that move while the clock stands still jump, and the servos chase 
 use path mode, or ``joint_by_joint_clock="sequential"``.)
 
 - every arm joint and finger slide has a position servo (see
-  :mod:`workcell.robots.mjcf`: ``kp = I w^2``, ``kv = 2 I w``) whose ``ctrl`` is the
+  :mod:`workcell.robots.mjcf`: ``kp = I w^2``, ``kv = 2 I w``) whose target is the
   planned value at the step's time plus ``kv / kp`` times the planned velocity (a
   velocity feed-forward: the servo force is ``kp (q_ref - q) + kv (qdot_ref - qdot)``);
+  the compiled cell's servos hold the initial pose at ctrl 0, so ``ctrl`` is the target
+  minus that pose (:mod:`workcell.cell.compile`);
 - the robot bodies have ``gravcomp = 1`` (the arm's own weight is compensated, the
   payload is not: the servos hold it);
 - at a grasp the weld of that gripper and part is activated with the relative pose
@@ -165,6 +167,7 @@ class _Run:
         self.act_adr = m.jnt_qposadr[act_jnt].astype(np.intp)
         kp, kv = m.actuator_gainprm[:, 0], -m.actuator_biasprm[:, 2]
         self.lead = kv / kp if options["feedforward"] else np.zeros(m.nu)
+        self.hold = m.actuator_biasprm[:, 0] / kp  # the joint value each servo holds at ctrl 0
         self.plan = plan_of(sim, self.act_adr)
         act_of = {int(j): a for a, j in enumerate(act_jnt)}
         self.robots = list(cc.joint_names)
@@ -262,8 +265,11 @@ class _Run:
                 opened = self.plan.at(np.array([t]))[0][0]  # the fingers' planned opening
                 acts = self.finger_act[g.robot]
                 self.pending.append((g.robot, g.part, self.act_adr[acts], opened[acts]))
-                where = ", ".join(f"{v:.4g}" for v in d.qpos[adr : adr + 3])
-                detail = f"release '{g.part}' at ({where}) m"
+                centroid = np.empty(3)  # the part frame's centroid offset, turned to the world
+                offset = self.sim.cell.centroid_frame(g.part)[:3, 3]
+                mujoco.mju_rotVecQuat(centroid, offset, d.qpos[adr + 3 : adr + 7])
+                where = ", ".join(f"{v:.4g}" for v in d.qpos[adr : adr + 3] + centroid)
+                detail = f"release '{g.part}': centroid ({where}) m"
             self._event(t, g.robot, g.kind, detail)
 
     def _reopen(self) -> None:
@@ -313,7 +319,7 @@ class _Run:
                 k = b - a
                 ts = np.arange(a, b) * h
                 ref, vel = self.plan.at(ts)
-                ctrl = np.clip(ref + self.lead * vel, lo, hi)
+                ctrl = np.clip(ref - self.hold + self.lead * vel, lo, hi)
                 qb, sb, fb = np.empty((k, m.nq)), np.empty((k, len(tools), 3)), np.empty((k, m.nu))
                 gp, gq = np.empty((k, len(grips), 3)), np.empty((k, len(grips), 4))
                 walls = np.zeros(k)
@@ -423,4 +429,5 @@ class _Run:
             tracking=tracking,
             parts=parts,
             options=self.options,
+            commands=self.sim.cycle_time()["commands"],  # the plan's: the program replayed
         )

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from workcell.cell.compile import CompiledCell
 from workcell.cell.workcell import Workcell
 from workcell.sim.timeline import Event, Timeline
+from workcell.spatial import pose_from_pos_quat
 
 __all__ = ["PhysicsResult", "SettledPart", "Tracking"]
 
@@ -141,7 +142,8 @@ class PhysicsResult:
     ``events``: the plan's commands, the physics grasps and releases, collisions and the
     settled parts; ``sim_time`` (s): the program's duration plus ``settle``;
     ``wall_time`` (s): the wall time of the physics loop; ``tracking`` per robot;
-    ``parts`` per movable part.
+    ``parts`` per movable part; ``commands``: the plan's cycle-time records (the program
+    the physics replays, :mod:`workcell.sim.cycle`).
     """
 
     cell: Workcell
@@ -158,6 +160,7 @@ class PhysicsResult:
     tracking: dict[str, Tracking] = field(default_factory=dict)
     parts: dict[str, SettledPart] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)
+    commands: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def events(self) -> tuple[Event, ...]:
@@ -185,8 +188,14 @@ class PhysicsResult:
         return self.sim_time / self.wall_time if self.wall_time > 0 else float("inf")
 
     def part_positions(self) -> dict[str, list[float]]:
-        """World position (m) of each movable part's body frame at the end, by name."""
-        return {p: s.position.tolist() for p, s in self.parts.items()}
+        """World position (m) of each movable part's centroid at the end, by name (as
+        :meth:`Simulator.part_positions <workcell.sim.simulator.Simulator.part_positions>`)."""
+        return {
+            p: (pose_from_pos_quat(s.position, s.quat) @ self.cell.centroid_frame(p))[
+                :3, 3
+            ].tolist()
+            for p, s in self.parts.items()
+        }
 
     def summary(self) -> dict[str, Any]:
         """The DESIGN.md ``workcell demo --json`` fields, plus ``physics``: timestep,
@@ -199,6 +208,7 @@ class PhysicsResult:
             "collisions": sum(1 for e in self.events if e.kind == "collision"),
             "objects": self.part_positions(),
             "mjcf": None,
+            "commands": [dict(c) for c in self.commands],
             "physics": {
                 "timestep_s": self.timestep,
                 "settle_s": self.settle,

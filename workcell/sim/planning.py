@@ -1,58 +1,119 @@
 """Joint-space motion plans: the frames of one move or of a path through waypoints.
 
-A plan is the simulated times (k,) of a motion's frames (s) and its joint values
-(k, dof; rad/m), the last row exactly the target. The simulator's modes (thesis §4.4):
+A plan is a :class:`Motion`: the local times (k,) of a motion's frames (s from its
+start), its joint values (k, dof; rad/m, the last row exactly the target), which limits
+were active for how long (for the cycle-time report) and, for motions that can blend
+into the next (profile "jerk", Cartesian moves), the law they follow. The simulator's
+modes (thesis §4.4):
 
 - path and playback (eq. 4.27, 4.28): all joints together along the segment, with the
   normalised progress of the time profile (:mod:`workcell.sim.profiles`), sampled every
   dt with one remainder step; the rows are given as a function of a row range, so a long
-  motion is never held in memory at once;
+  motion is never held in memory at once. Profile "jerk": the time-optimal
+  synchronised jerk-limited motion of :mod:`workcell.sim.jerk` instead;
 - joint-by-joint: the joints one after another (joint 1 first), each with its own
-  duration; on the thesis's clock only the joint that moves most advances the time
-  (the other joints' frames share one time), on the "sequential" clock every joint does.
+  duration; on the thesis's clock only the joint that moves most (profile "jerk": the
+  one that takes longest) advances the time (the other joints' frames share one time),
+  on the "sequential" clock every joint does.
 
 :func:`plan_waypoints` goes through joint waypoints, linearly in joints between them at
-the robot's speed (a straight line's samples).
+the robot's speed (a straight line's samples, the thesis's timing).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell import limits as work_limits
 from workcell.sim import profiles
+from workcell.sim.jerk import Limits, plan_jerk
 from workcell.sim.profiles import step_times
 
-__all__ = ["Rows", "plan_move", "plan_waypoints"]
+__all__ = ["Motion", "Rows", "frames_of", "law_rows", "plan_move", "plan_waypoints"]
 
 Array = NDArray[np.float64]
 Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, hi)
+
+
+@dataclass
+class Motion:
+    """A planned motion of one robot (module doc): frame times ``t`` (k,; s from its
+    start), joint ``rows``, ``activity`` (seconds per active limit) and ``law`` (a
+    :class:`~workcell.sim.jerk.JerkMove` or :class:`~workcell.sim.timing.PathMotion`, or
+    None when it cannot blend)."""
+
+    t: Array
+    rows: Rows
+    activity: dict[str, float] = field(default_factory=dict)
+    law: Any = None
+
+    @property
+    def duration(self) -> float:
+        """Its duration (s): the last frame's time (0 without frames)."""
+        return float(self.t[-1]) if len(self.t) else 0.0
+
+    def rows_of(self, lo: int = 0, hi: int | None = None) -> Array:
+        """Rows lo:hi as an array."""
+        hi = len(self.t) if hi is None else hi
+        return self.rows(lo, hi) if callable(self.rows) else np.asarray(self.rows[lo:hi])
+
+
+def frames_of(duration: float, dt: float, what: str) -> Array:
+    """The sample times of a motion of ``duration`` (s) every ``dt`` (s), after checking
+    the work budget (``max_frames_per_command``, naming ``what``) before they are made."""
+    work_limits.check("max_frames_per_command", math.ceil(duration / dt), what)
+    return step_times(duration, dt)  # (which checks again, without the command's name)
+
+
+def law_rows(law: Any, t: Array, target: Array) -> Rows:
+    """Rows of a law (anything with ``positions(t)``) at times t, built on demand (rows(lo,
+    hi): a long motion is never held at once), the last one exactly ``target``."""
+    last = len(t) - 1
+
+    def rows(lo: int, hi: int) -> Array:
+        Q = law.positions(t[lo:hi])
+        if hi > last:
+            Q[last - lo] = target
+        return Q
+
+    return rows
 
 
 def plan_move(
     q0: Array,
     target: Array,
     *,
-    start: float,
     speed: float,
     dt: float,
     joint_by_joint: bool = False,
     clock: str = "thesis",
     profile: str = "linear",
     acceleration: float = 2.0,
-) -> tuple[Array, Rows]:
-    """Frames of one move from ``q0`` to ``target`` starting at simulated time ``start``
-    (s), at ``speed`` (rad/s, the joint that moves most), sampled every ``dt`` (s); see the
-    module doc. No motion gives no frames."""
+    limits: Limits | None = None,
+    what: str = "move",
+) -> Motion:
+    """One move from ``q0`` to ``target`` (module doc) at ``speed`` (rad/s, the joint that
+    moves most; thesis profiles) or within ``limits`` (profile "jerk"), sampled every
+    ``dt`` (s). No motion gives no frames; more than the work budget's frames per
+    command raise LimitError naming ``what``."""
     delta = target - q0
     big = float(np.max(np.abs(delta))) if len(delta) else 0.0
     if big == 0.0:
-        return np.empty(0), np.empty((0, len(q0)))
+        return Motion(np.empty(0), np.empty((0, len(q0))))
+    jerk = profile == "jerk"
     if not joint_by_joint:  # path and playback: eq. 4.27, 4.28
+        if jerk:
+            law = plan_jerk(q0, target, limits)  # type: ignore[arg-type]
+            t = frames_of(law.duration, dt, what)
+            return Motion(t, law_rows(law, t, target), law.activity(), law)
         T = profiles.duration(profile, big, speed, acceleration)
-        t = step_times(T, dt)
+        t = frames_of(T, dt, what)
         s = profiles.progress(profile, t, T, big, speed, acceleration)
         last = len(t) - 1
 
@@ -62,35 +123,61 @@ def plan_move(
                 Q[last - lo] = target
             return Q
 
-        return start + t, rows
-    times, out = [], []
-    q = q0.copy()
-    now = start
-    fastest = int(np.argmax(np.abs(delta)))
-    for i in np.flatnonzero(delta):
+        return Motion(t, rows, profiles.activity(profile, big, speed, acceleration))
+    moving = np.flatnonzero(delta)
+    shapes = {}  # joint -> (duration, positions at times, activity)
+    for i in moving:
         di = abs(float(delta[i]))
-        Ti = profiles.duration(profile, di, speed, acceleration)
+        if jerk:
+            one = Limits(*(x[i : i + 1] for x in (limits.speed, limits.acceleration, limits.jerk)))  # type: ignore[union-attr]
+            law1 = plan_jerk(q0[i : i + 1], target[i : i + 1], one)
+            act = {k.replace("j1 ", f"j{i + 1} "): v for k, v in law1.activity().items()}
+            shapes[i] = (law1.duration, lambda t, law1=law1: law1.positions(t)[:, 0], act)
+        else:
+            Ti = profiles.duration(profile, di, speed, acceleration)
+            shapes[i] = (
+                Ti,
+                lambda t, i=i, di=di, Ti=Ti: (
+                    q0[i] + delta[i] * profiles.progress(profile, t, Ti, di, speed, acceleration)
+                ),
+                profiles.activity(profile, di, speed, acceleration),
+            )
+    longest = max(moving, key=lambda i: shapes[i][0]) if jerk else int(np.argmax(np.abs(delta)))
+    times, out, activity = [], [], {}
+    q = q0.copy()
+    now = 0.0
+    total = sum(shapes[i][0] for i in moving)
+    work_limits.check("max_frames_per_command", math.ceil(total / dt) + len(moving), what)
+    for i in moving:
+        Ti, at, act = shapes[i]
         t = step_times(Ti, dt)
         Q = np.repeat(q[None, :], len(t), axis=0)
-        Q[:, i] = q0[i] + delta[i] * profiles.progress(profile, t, Ti, di, speed, acceleration)
+        Q[:, i] = at(t)
         Q[-1, i] = target[i]
         q[i] = target[i]
-        if clock == "sequential" or i == fastest:
+        if clock == "sequential" or i == longest:
             times.append(now + t)
             now += Ti
+            for k, v in act.items():
+                activity[k] = activity.get(k, 0.0) + v
         else:  # thesis: the clock runs only while the joint that moves most moves
             times.append(np.full(len(t), now))
         out.append(Q)
-    return np.concatenate(times), np.concatenate(out)
+    return Motion(np.concatenate(times), np.concatenate(out), activity)
 
 
 def plan_waypoints(
-    q0: Array, waypoints: Array, *, start: float, speed: float, dt: float
-) -> tuple[Array, Array]:
+    q0: Array, waypoints: Array, *, speed: float, dt: float, what: str = "move"
+) -> Motion:
     """Path-mode frames from ``q0`` through joint ``waypoints`` (k, dof), linear in joints
-    between them, each segment taking max |dq| / ``speed`` (s); starts at ``start`` (s)."""
+    between them, each segment taking max |dq| / ``speed`` (s)."""
+    steps = (
+        np.abs(np.diff(np.vstack([q0, waypoints]), axis=0)).max(axis=1) if len(waypoints) else []
+    )
+    total = float(np.sum(steps)) / speed
+    work_limits.check("max_frames_per_command", math.ceil(total / dt) + len(waypoints), what)
     times, rows = [np.empty(0)], [np.empty((0, len(q0)))]
-    now, prev = start, q0
+    now, prev = 0.0, q0
     for q in waypoints:
         d = q - prev
         big = float(np.max(np.abs(d)))
@@ -104,4 +191,4 @@ def plan_waypoints(
         rows.append(R)
         now += T
         prev = q
-    return np.concatenate(times), np.concatenate(rows)
+    return Motion(np.concatenate(times), np.concatenate(rows), {"robot speed": now})

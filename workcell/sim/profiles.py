@@ -1,5 +1,9 @@
 """Time profiles of a joint-space motion: the thesis's constant speed and two smoother ones.
 
+(The fourth profile, ``"jerk"``, is not a normalised progress: each joint's own speed,
+acceleration and jerk limits set a time-optimal motion, see :mod:`workcell.sim.jerk`.
+The three below are the *thesis profiles*: the robot's one speed sets their time.)
+
 A motion covers ``distance`` (rad or m, the largest joint motion) with peak speed
 ``speed`` (rad/s); every joint follows the same normalised progress s(t) in [0, 1]:
 
@@ -22,11 +26,12 @@ from numpy.typing import NDArray
 
 from workcell import limits
 
-__all__ = ["PROFILES", "duration", "progress", "step_times"]
+__all__ = ["PROFILES", "THESIS_PROFILES", "activity", "duration", "progress", "step_times"]
 
 _REMAINDER_TOL = 1e-9  # a remainder below this fraction of dT is no step
 
-PROFILES = ("linear", "trapezoid", "quintic")
+THESIS_PROFILES = ("linear", "trapezoid", "quintic")
+PROFILES = (*THESIS_PROFILES, "jerk")
 Array = NDArray[np.float64]
 
 
@@ -41,6 +46,17 @@ def duration(profile: str, distance: float, speed: float, acceleration: float) -
     if distance >= speed * speed / acceleration:
         return distance / speed + speed / acceleration
     return 2.0 * math.sqrt(distance / acceleration)
+
+
+def activity(profile: str, distance: float, speed: float, acceleration: float) -> dict[str, float]:
+    """Seconds during which the robot's speed or acceleration is what the motion runs at
+    (the thesis profiles' "limits": ``"robot speed"``, ``"robot acceleration"``)."""
+    T = duration(profile, distance, speed, acceleration)
+    if profile != "trapezoid" or T == 0.0:
+        return {"robot speed": T}
+    v = min(speed, math.sqrt(distance * acceleration))
+    accelerating = 2.0 * v / acceleration
+    return {"robot acceleration": accelerating, "robot speed": T - accelerating}
 
 
 def progress(

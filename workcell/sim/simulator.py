@@ -63,10 +63,19 @@ Several robots at once (beyond the thesis; :mod:`workcell.sim.concurrent`): insi
 ``with sim.concurrently():`` each robot's motion commands start together and the frames
 are merged, so the clock advances by the longest robot's time.
 
+Planning and task level (beyond the thesis; :mod:`workcell.plan`): ``plan=True`` on
+``move_joints_absolute`` and ``move_end_effector`` moves along a collision-free path
+(OMPL), ``pick``, ``place`` and ``handover`` choose poses, configurations and paths
+themselves; a part released in mid-air gets a ``warning`` event, or drops onto what is
+below it with ``open_gripper(..., settle=True)``.
+
 Profiles (``profile``; :mod:`workcell.sim.profiles`): the thesis's constant speed
 ("linear"), or, beyond the thesis, "trapezoid" (``acceleration`` rad/s^2) or "quintic",
 for joint moves and ``move_end_effector``; the simulated clock then runs by the
-profile's duration.
+profile's duration. Like an industrial controller (:mod:`workcell.sim.motion`): profile
+"jerk" (each joint's own speed, acceleration and jerk limits), ``move_linear`` and
+``move_circular`` at a tool speed, zones that blend a move into the next, the speed
+override, and the cycle-time report (``summary()["commands"]``).
 
 Errors: every command validates first (unknown robot: ProgramError listing the robots;
 target outside the limits: JointLimitError naming the joint and its range; bad speed or
@@ -76,7 +85,6 @@ applied restores joints, clocks, speeds and timeline as they were before the com
 
 from __future__ import annotations
 
-import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -85,18 +93,20 @@ from typing import Any
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from tqdm import tqdm
 
 from workcell import limits
 from workcell.cell.compile import CompiledCell, compile_cell
 from workcell.cell.workcell import Workcell
-from workcell.checks import is_finite_number
+from workcell.checks import is_finite_number, quote_angle
 from workcell.errors import (
     CollisionError,
-    JointLimitError,
     ProgramError,
 )
+from workcell.plan.motion import PlanningCommands
+from workcell.plan.resting import RestingCommands
+from workcell.plan.tasks import TaskCommands
 from workcell.sim import profiles
+from workcell.sim.blending import Pending
 from workcell.sim.cartesian import CartesianCommands
 from workcell.sim.concurrent import ConcurrentCommands
 from workcell.sim.contacts import (
@@ -105,8 +115,9 @@ from workcell.sim.contacts import (
     Penetration,
     contact_model,
 )
+from workcell.sim.cycle import command_record
 from workcell.sim.gripping import Carried, GraspRecord, GripperCommands, Hold
-from workcell.sim.planning import Rows, plan_move
+from workcell.sim.motion import MotionCommands
 from workcell.sim.profiles import step_times
 from workcell.sim.timeline import DEFAULT_MEMORY_LIMIT, Event, Timeline
 
@@ -116,11 +127,17 @@ MODES = ("path", "joint-by-joint", "playback")
 JOINT_BY_JOINT_CLOCKS = ("thesis", "sequential")
 
 Array = NDArray[np.float64]
-_EMIT_CHUNK = 16384  # frames built and emitted at a time
-_PROGRESS_FRAMES = 100_000  # commands longer than this show a progress bar
 
 
-class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
+class Simulator(
+    MotionCommands,
+    CartesianCommands,
+    GripperCommands,
+    ConcurrentCommands,
+    PlanningCommands,
+    RestingCommands,
+    TaskCommands,
+):
     """Kinematic simulator of a workcell (see the module doc).
 
     ``mode``: "path", "joint-by-joint" or "playback"; ``dt`` the sampling interval dT
@@ -201,6 +218,8 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
             )
             self._site[name] = self.model.site(self.compiled.tool_sites[name]).id
             self._speed[name] = float(placement.robot.nominal_speed)
+        self._override = dict.fromkeys(self._qadr, 1.0)  # speed override per robot
+        self._pending: dict[str, Pending] = {}  # zone moves the next move may blend out of
         m, cc = self.model, self.compiled
         self._part_body = {p: m.body(b).id for p, b in cc.part_bodies.items()}
         self._free_adr = {p: int(m.jnt_qposadr[m.joint(j).id]) for p, j in cc.free_joints.items()}
@@ -279,8 +298,13 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         return self.timeline.sim_times(), self.timeline.qpos()[:, adr]
 
     def part_positions(self) -> dict[str, list[float]]:
-        """World position (m) of each movable part's body frame, by name."""
-        return {p: self.data.xpos[b].tolist() for p, b in self._part_body.items()}
+        """World position (m) of each movable part's centroid, by name: the point grasps
+        aim at and ``place`` sets down (``part_pose`` gives the part frame's pose)."""
+        d = self.data
+        return {
+            p: (d.xpos[b] + d.xmat[b].reshape(3, 3) @ self._centroids[p]).tolist()
+            for p, b in self._part_body.items()
+        }
 
     def clearance(self, a: str, b: str) -> float:
         """Minimum distance (m) between two things now; negative: penetration depth.
@@ -292,7 +316,8 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         return self.contacts.clearance(self.data, a, b)[0]
 
     def summary(self) -> dict[str, Any]:
-        """The DESIGN.md ``workcell demo --json`` fields this slice knows (``mjcf`` None)."""
+        """The DESIGN.md ``workcell demo --json`` fields this slice knows (``mjcf`` None),
+        and ``commands``: the cycle-time records (:meth:`cycle_time`)."""
         return {
             "sim_time_s": self.sim_time,
             "wall_time_s": self._wall,
@@ -301,6 +326,7 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
             "collisions": sum(1 for e in self.events if e.kind == "collision"),
             "objects": self.part_positions(),
             "mjcf": None,
+            "commands": self.cycle_time()["commands"],
         }
 
     # ------------------------------------------------------------------ commands
@@ -311,24 +337,43 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         top = float(np.max(self.cell.robots[name].robot.max_speeds))
         if not (is_finite_number(speed) and 0 < float(speed) <= top):
             raise ProgramError(
-                f"set_speed '{name}': speed must be a number in (0, {top:.4g}] rad/s "
-                f"(the fastest joint's limit), got {speed!r}"
+                f"set_speed '{name}': speed must be > 0 and at most {quote_angle(top, '/s')} "
+                f"(the fastest joint's limit), got {quote_angle(speed, '/s')}"
             )
         with self._transaction():
             self._speed[name] = float(speed)
             self.timeline.add_event(self.sim_time, name, "speed", f"speed {float(speed):.6g} rad/s")
 
-    def move_joints_absolute(self, robot: str, q: ArrayLike) -> None:
-        """Move the robot's joints to ``q`` (rad/m) in the simulator's mode."""
+    def move_joints_absolute(
+        self, robot: str, q: ArrayLike | str, *, zone: float = 0.0, plan: bool = False
+    ) -> None:
+        """Move the robot's joints to ``q`` (rad/m), or to one of its named poses
+        (``"home"``), in the simulator's mode; ``zone`` (m): blend into the next move
+        (:mod:`workcell.sim.blending`); with ``plan``, along a collision-free path
+        (:mod:`workcell.plan.motion`; PlanningError when none; a planned path stops at
+        its end: no zone)."""
         name = self._robot(robot)
+        if isinstance(q, str):
+            poses = self.cell.robots[name].robot.poses
+            if q not in poses:
+                raise ProgramError(
+                    f"move_joints_absolute '{name}': no pose {q!r}; "
+                    f"named poses: {', '.join(poses) or 'none'}"
+                )
+            q = poses[q]
         target = self._vector(name, q, "move_joints_absolute", "q")
-        self._move(name, target, "move_joints_absolute")
+        if plan:
+            self._check_target(name, target, "move_joints_absolute")
+            self._move_planned(name, [target], "move_joints_absolute")
+        else:
+            self._move(name, target, "move_joints_absolute", zone)
 
-    def move_joints_relative(self, robot: str, dq: ArrayLike) -> None:
-        """Move the robot's joints by ``dq`` (rad/m) in the simulator's mode."""
+    def move_joints_relative(self, robot: str, dq: ArrayLike, *, zone: float = 0.0) -> None:
+        """Move the robot's joints by ``dq`` (rad/m) in the simulator's mode; ``zone`` (m)
+        as for :meth:`move_joints_absolute`."""
         name = self._robot(robot)
         d = self._vector(name, dq, "move_joints_relative", "dq")
-        self._move(name, self.joints(name) + d, "move_joints_relative")
+        self._move(name, self.joints(name) + d, "move_joints_relative", zone)
 
     def set_mode(self, mode: str) -> None:
         """Switch the simulation mode for the commands that follow."""
@@ -351,9 +396,10 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
                 self.timeline.append(self.sim_time + s, self._wall, self.data.qpos)
                 self.sim_time += s
                 self._wall += time.perf_counter() - c0
-            self.timeline.add_event(self.sim_time, None, "wait", f"wait {s:.6g} s")
+            rec = command_record(None, "wait", self.sim_time - s, s, "wait")
+            self.timeline.add_event(self.sim_time, None, "wait", f"wait {s:.6g} s", data=rec)
 
-    def log_error(self, exc: BaseException, robot: str | None = None) -> None:
+    def _log_error(self, exc: BaseException, robot: str | None = None) -> None:
         """Note on the timeline that the program stopped on ``exc``: an ``error`` event
         (its type and message) at the current time. The failed command itself changed
         nothing; this is for runners that record or report the run up to the error."""
@@ -413,69 +459,11 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
         if a.shape != (n,):
             got = f"{a.size} value(s)" if a.ndim == 1 else f"an array of shape {a.shape}"
             raise ProgramError(
-                f"{command} '{name}': {what} must be {n} numbers (rad/m, one per joint), got {got}"
+                f"{command} '{name}': {what} must be {n} joint values (one per joint), got {got}"
             )
         if not np.all(np.isfinite(a)):
             raise ProgramError(f"{command} '{name}': {what} must be finite, got {a.tolist()}")
         return a
-
-    def _plan(self, name: str, q0: Array, target: Array) -> tuple[Array, Rows]:
-        """The frames of one move of robot ``name`` (see :mod:`workcell.sim.planning`)."""
-        return plan_move(
-            q0,
-            target,
-            start=self._start_time(name),
-            speed=self._speed[name],
-            dt=self.dt,
-            joint_by_joint=self.mode == "joint-by-joint",
-            clock=self.joint_by_joint_clock,
-            profile=self.profile,
-            acceleration=self.acceleration,
-        )
-
-    def _move(self, name: str, target: Array, command: str) -> None:
-        placement = self.cell.robots[name]
-        try:
-            placement.robot.check_limits(target)
-        except JointLimitError as exc:
-            raise JointLimitError(f"{command} '{name}': target refused: {exc}") from exc
-        times, Qr = self._plan(name, self.joints(name), target)
-        deg = ", ".join(f"{v:.6g}" for v in np.degrees(target))
-        self._run(name, times, Qr, command, f"to ({deg}) deg")
-
-    def _run(self, name: str, times: Array, Qr: Rows, command: str, detail: str) -> None:
-        """Emit a robot's planned frames (carrying what it holds) and log the move event.
-
-        Frames are built and emitted ``_EMIT_CHUNK`` at a time (bounded memory)."""
-        if self._block is not None:  # inside concurrently(): run when the block ends
-            self._defer(name, times, Qr, command, detail)
-            return
-        k = len(times)
-        if k:  # before any work: the command's frames, the simulation's, its clock
-            limits.check("max_frames_per_command", k, f"{command} '{name}'")
-            limits.check("max_sim_time", float(times[-1]), f"{command} '{name}': the clock")
-            self.timeline.reserve(k, f"{command} '{name}'")
-        carried = self._carried(name) if k else []
-        rows = Qr if callable(Qr) else (lambda lo, hi: Qr[lo:hi])
-        base, adr = self.data.qpos.copy(), self._qadr[name]
-        t_before = self.sim_time
-        with self._transaction():
-            show = k > _PROGRESS_FRAMES and (
-                sys.stderr.isatty() if self.progress is None else self.progress
-            )
-            with tqdm(total=k, unit="frame", desc=command, leave=False, disable=not show) as bar:
-                for lo in range(0, k, _EMIT_CHUNK):
-                    hi = min(k, lo + _EMIT_CHUNK)
-                    Q = np.repeat(base[None, :], hi - lo, axis=0)
-                    Q[:, adr] = rows(lo, hi)
-                    self._emit(times[lo:hi], Q, carried, name)
-                    bar.update(hi - lo)
-            self.timeline.add_event(
-                self.sim_time,
-                name,
-                "move",
-                f"{command} {detail}: {k} frames, {self.sim_time - t_before:.6g} s",
-            )
 
     def _emit(
         self,
@@ -527,9 +515,7 @@ class Simulator(CartesianCommands, GripperCommands, ConcurrentCommands):
                     collide(m, d)
                     if d.ncon or self._touching:
                         pens = self.contacts.penetrations(d)
-                        self._contact_events(
-                            float(times[j]), pens, mover=mover, frame=first + j
-                        )
+                        self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
                 walls[j] = clock()
         self.timeline.extend(times, w0 + (walls - c0), Q)
         self.sim_time = float(times[-1])

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import tempfile
 from collections.abc import Iterator
-from typing import IO, NamedTuple
+from typing import IO, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,13 +43,16 @@ class Event(NamedTuple):
     cell), ``kind`` ("move", "wait", "grasp", "release", "collision", "error", ...), a
     human-readable ``detail``, and ``frame``: the frame showing it (for a command, the last
     frame on the timeline when it was recorded, its result; for a collision, the first
-    frame in which the pair overlaps; several frames may share one time)."""
+    frame in which the pair overlaps; several frames may share one time); ``data``: the
+    command's cycle-time record, for the events that end a command (see
+    :mod:`workcell.sim.cycle`), else None."""
 
     t: float
     robot: str | None
     kind: str
     detail: str
     frame: int = -1
+    data: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, object]:
         """The DESIGN.md ``{t, robot, kind, detail}`` object, plus ``frame``."""
@@ -276,12 +279,20 @@ class Timeline:
         return tuple(self._events)
 
     def add_event(
-        self, t: float, robot: str | None, kind: str, detail: str = "", frame: int | None = None
+        self,
+        t: float,
+        robot: str | None,
+        kind: str,
+        detail: str = "",
+        frame: int | None = None,
+        data: dict[str, Any] | None = None,
     ) -> Event:
         """Record an event and return it; its ``frame`` defaults to the last frame so far
         (give it for an event that belongs to a frame about to be added, e.g. a collision
-        found while a batch of frames is computed)."""
-        e = Event(float(t), robot, str(kind), str(detail), self._n - 1 if frame is None else frame)
+        found while a batch of frames is computed); ``data``: its command record."""
+        e = Event(
+            float(t), robot, str(kind), str(detail), self._n - 1 if frame is None else frame, data
+        )
         self._events.append(e)
         return e
 
