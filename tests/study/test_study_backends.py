@@ -186,3 +186,10 @@ def test_a_script_without_a_main_guard(tmp_path):
     assert threaded.returncode != 0
     assert "if __name__ == '__main__':" in threaded.stderr
     assert "StudyError" in threaded.stderr
+
+
+def test_without_ray_the_ray_backend_says_how_to_get_it(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray fails as if not installed
+    study = Study(cell="joints", vary={"puma.base.x": "0,1"})
+    with pytest.raises(StudyError, match=r"pip install 'workcell\[cluster\]'"):
+        run(study, backend="ray", progress=False)
