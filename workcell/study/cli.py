@@ -19,7 +19,7 @@ parameters (--vary NAME=VALUES, repeat for each):
   ROBOT.robot (names)                           which robot stands there
   ROBOT.speed (rad/s)                           its speed, pinned (the program's own
                                                 speed commands for it are overridden)
-  ROBOT.override (0..1)                         a factor on every speed the program sets
+  ROBOT.override (0..1)                         its speed override (set_override), pinned
   PART.x|y|z (m), PART.yaw (deg)                where a static or movable part is
 values: LO:HI:N (N values), LO:HI (a range, with --sample), A,B,C (a list)
 
