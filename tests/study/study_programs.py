@@ -69,3 +69,11 @@ def asks_for_5000_frames(sim) -> None:
 
     limits.check("max_frames", 5000, "this program")
     thesis_joints.program(sim)
+
+
+def jerk_joint_moves(sim) -> None:
+    """Example 1's joint moves, time-optimal and jerk-limited, at full override (which a
+    study may pin)."""
+    sim.set_profile("jerk")
+    sim.set_override("puma", 1.0)
+    thesis_joints.program(sim)

@@ -21,7 +21,7 @@ from workcell.study.pool import CRASH_MESSAGE
 MIXED = Study(
     cell="pick-place",
     vary={
-        "puma.robot": "puma260,puma560",
+        "puma.robot": "puma260,ur5e",
         "puma.base.x": "0:0.05:2",
         "puma.base.y": "-0.1,0",
     },
@@ -55,7 +55,18 @@ def test_serial_results(serial_table):
     assert rows[0]["puma.robot"] == "puma260"
 
 
-def test_process_pool_gives_the_same_rows_bit_for_bit(serial_table):
+@pytest.mark.parametrize("start", ["fork", "forkserver"])
+def test_process_pool_gives_the_same_rows_bit_for_bit(serial_table, start, monkeypatch):
+    """Workers forked from this process or from the fork server (whichever the parent's
+    threads allow, see workcell.study.pool): the same rows as one process."""
+    import multiprocessing
+
+    from workcell.study import pool
+
+    context = multiprocessing.get_context(start)
+    if start == "forkserver":
+        context.set_forkserver_preload(["workcell.study.evaluation"])
+    monkeypatch.setattr(pool, "_context", lambda: context)
     table = run(MIXED, backend="process", workers=2, batch_size=1, progress=False)
     assert _bits(table) == _bits(serial_table)
 
@@ -152,15 +163,33 @@ def test_ray_retries_a_killed_worker_then_writes_an_error_row(local_ray):
 
 
 @pytest.mark.slow
-def test_a_script_without_a_main_guard_is_told_what_to_do(tmp_path):
-    script = tmp_path / "study_script.py"
-    script.write_text(
+def test_a_script_without_a_main_guard(tmp_path):
+    """Alone, a script's workers are forks of it: no main guard needed. With a thread
+    running, workers come from the fork server, which imports the main script: without
+    the guard the study stops with a StudyError that says what to do."""
+    body = (
         "from workcell.study import Study, run\n"
-        "run(Study(cell='joints', vary={'puma.base.x': '0,0.1'}), backend='process', workers=1)\n"
+        "table = run(Study(cell='joints', vary={'puma.base.x': '0,0.1'}), workers=1)\n"
+        "print(table.num_rows, 'rows')\n"
     )
-    done = subprocess.run(
-        [sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path
+    thread = "import threading, time\nthreading.Thread(target=time.sleep, args=(60,), daemon=True).start()\n"
+    for name, text in (("alone.py", body), ("threaded.py", thread + body)):
+        (tmp_path / name).write_text(text)
+    alone = subprocess.run(
+        [sys.executable, "alone.py"], capture_output=True, text=True, timeout=300, cwd=tmp_path
     )
-    assert done.returncode != 0
-    assert "if __name__ == '__main__':" in done.stderr
-    assert "StudyError" in done.stderr
+    assert alone.returncode == 0, alone.stderr[-2000:]
+    assert "2 rows" in alone.stdout
+    threaded = subprocess.run(
+        [sys.executable, "threaded.py"], capture_output=True, text=True, timeout=300, cwd=tmp_path
+    )
+    assert threaded.returncode != 0
+    assert "if __name__ == '__main__':" in threaded.stderr
+    assert "StudyError" in threaded.stderr
+
+
+def test_without_ray_the_ray_backend_says_how_to_get_it(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray fails as if not installed
+    study = Study(cell="joints", vary={"puma.base.x": "0,1"})
+    with pytest.raises(StudyError, match=r"pip install 'workcell\[cluster\]'"):
+        run(study, backend="ray", progress=False)

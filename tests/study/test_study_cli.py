@@ -83,6 +83,7 @@ def test_a_wcl_program_that_builds_its_own_cell(tmp_path, capsys):
     ) == 0  # fmt: skip
     given = pq.read_table(tmp_path / "b" / "results.parquet")
     assert own.column("feasible").to_pylist() == [True, True]
+    assert min(own.column("cycle_time_s").to_pylist()) > 20  # the whole program ran
     assert own.column("cycle_time_s").equals(given.column("cycle_time_s"))
     capsys.readouterr()
 
@@ -116,3 +117,15 @@ def test_placement_axes():
     assert placement_axes([cy, cx, yaw]) == (cx, cy)
     assert placement_axes([yaw, speed]) == (yaw, speed)
     assert placement_axes([x]) is None
+
+
+def test_the_progress_bar_shows_the_running_best(capsys):
+    from workcell.study import Study, run
+
+    table = run(
+        Study(cell="pick-place", vary={"puma.base.x": "0:0.1:3"}), backend="serial", progress=True
+    )
+    best = min(t for t in table.column("cycle_time_s").to_pylist() if t is not None)
+    err = capsys.readouterr().err
+    assert "3/3" in err
+    assert f"best {best:.3f} s" in err

@@ -103,6 +103,17 @@ def test_pinned_speed_and_override_follow_eq_4_27(speed, override):
     )
 
 
+def test_a_pinned_override_scales_jerk_limited_moves_by_its_inverse():
+    """Speeds x f, accelerations x f^2, jerks x f^3: the same path in exactly 1/f the time,
+    whatever override the program itself sets."""
+    study = Study(cell="joints", program=sp.jerk_joint_moves, vary={"puma.override": "1,0.5,0.25"})
+    setup, _ = prepare(study)
+    ev = Evaluator(setup)
+    t = {c.values[0]: ev.evaluate(c)["cycle_time_s"] for c in study.candidates()}
+    assert t[0.5] == pytest.approx(2 * t[1.0], rel=1e-9)
+    assert t[0.25] == pytest.approx(4 * t[1.0], rel=1e-9)
+
+
 def test_joint_limit_margin_of_example_1_is_joint_5_at_90_deg():
     # limits (deg, DESIGN.md): j1 +-160, j2 -76..256, j3 -214..34, j4 -194..384, j5 +-122,
     # j6 +-267; example 1's poses (start, after the relative move, absolute) are the
@@ -166,22 +177,28 @@ def test_any_exception_becomes_the_candidates_error_row():
 
 
 def test_a_wcl_program_on_a_cell_file_runs_like_the_script_itself(tmp_path):
-    x, y = 0.05, -0.05
+    """Each candidate of a study of a .wcl program on a cell file (one evaluator for all,
+    the script parsed once) against the script run directly on the moved cell."""
     base = thesis_pick_place.build()
     base.save(tmp_path / "cell.json")
-    _moved_cell(x, y).save(tmp_path / "moved.json")
     body = (ASSETS / "thesis_example2.wcl").read_text().split("simulate path dt 0.01\n", 1)[1]
-    script = tmp_path / "moved.wcl"
-    script.write_text(f"cell load moved.json\nsimulate path dt 0.01\n{body}")
-    session = run_script(script, Session(base_dir=tmp_path), out=lambda s: None)
     study = Study(
         cell=str(tmp_path / "cell.json"),
         program=ASSETS / "thesis_example2.wcl",
-        vary={"puma.base.x": [x], "puma.base.y": [y]},
+        vary={"puma.base.x": [0.0, 0.05], "puma.base.y": [-0.05]},
     )
-    row = _evaluate(study, x, y)
-    assert row["feasible"], row["error"]
-    assert row["cycle_time_s"] == session.sim.sim_time
+    setup, _ = prepare(study)
+    ev = Evaluator(setup)
+    for c in study.candidates():
+        x, y = c.values
+        _moved_cell(x, y).save(tmp_path / "moved.json")
+        script = tmp_path / "moved.wcl"
+        script.write_text(f"cell load moved.json\nsimulate path dt 0.01\n{body}")
+        session = run_script(script, Session(base_dir=tmp_path), out=lambda s: None)
+        row = ev.evaluate(c)
+        assert row["feasible"], row["error"]
+        assert row["cycle_time_s"] == session.sim.sim_time
+        assert row["cycle_time_s"] > 20  # the whole program ran
 
 
 def test_work_limits_where_the_study_is_set_up_apply_in_every_worker():

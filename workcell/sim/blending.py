@@ -40,11 +40,12 @@ from workcell.cell.workcell import RobotPlacement
 from workcell.errors import ProgramError
 from workcell.sim.cartesian import path_joints
 from workcell.sim.jerk import Limits, plan_jerk
+from workcell.sim.pathlaw import PathMotion
 from workcell.sim.paths import CartesianPath, blend_paths
 from workcell.sim.planning import Motion
 from workcell.sim.profiles import step_times
 from workcell.sim.timeline import TimelineMark
-from workcell.sim.timing import PathMotion, sample_params, timed_frames
+from workcell.sim.timing import sample_params, timed_frames
 from workcell.spatial import invert
 
 __all__ = ["Blend", "Pending", "clip_zone", "joint_blend", "path_blend", "tool_lengths"]

@@ -23,10 +23,11 @@ from workcell.sim.blending import Blend, Pending, joint_blend, path_blend, tool_
 from workcell.sim.cartesian import path_joints
 from workcell.sim.cycle import command_record
 from workcell.sim.jerk import Limits, joint_limits, require_finite
+from workcell.sim.pathlaw import PathMotion
 from workcell.sim.paths import CartesianPath
 from workcell.sim.planning import Motion, Rows, law_rows, plan_move
 from workcell.sim.timeline import TimelineMark
-from workcell.sim.timing import PathMotion, sample_params, timed_frames
+from workcell.sim.timing import sample_params, timed_frames
 from workcell.spatial import invert
 
 if TYPE_CHECKING:

@@ -45,7 +45,7 @@ Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, 
 class Motion:
     """A planned motion of one robot (module doc): frame times ``t`` (k,; s from its
     start), joint ``rows``, ``activity`` (seconds per active limit) and ``law`` (a
-    :class:`~workcell.sim.jerk.JerkMove` or :class:`~workcell.sim.timing.PathMotion`, or
+    :class:`~workcell.sim.jerk.JerkMove` or :class:`~workcell.sim.pathlaw.PathMotion`, or
     None when it cannot blend)."""
 
     t: Array

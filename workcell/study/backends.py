@@ -95,6 +95,7 @@ class ProcessBackend(Backend):
         self.batch_size = batch_size
         self.retries = retries
         self.crashes = 0
+        self.start_method = ""
 
     def run(self, setup: Setup, todo: list[Candidate]) -> Iterator[dict[str, Any]]:
         try:
@@ -116,6 +117,7 @@ class ProcessBackend(Backend):
             self.memory_mb.update(pool.memory_mb)
             self.cpu_s.update(pool.cpu_s)
             self.crashes = pool.crashes
+            self.start_method = pool.start_method
 
 
 def _ray_batch(

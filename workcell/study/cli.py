@@ -19,7 +19,7 @@ parameters (--vary NAME=VALUES, repeat for each):
   ROBOT.robot (names)                           which robot stands there
   ROBOT.speed (rad/s)                           its speed, pinned (the program's own
                                                 speed commands for it are overridden)
-  ROBOT.override (0..1)                         a factor on every speed the program sets
+  ROBOT.override (0..1)                         its speed override (set_override), pinned
   PART.x|y|z (m), PART.yaw (deg)                where a static or movable part is
 values: LO:HI:N (N values), LO:HI (a range, with --sample), A,B,C (a list)
 
@@ -103,11 +103,22 @@ def register(sub: Any) -> None:
         help="the program (command language); its lines up to 'simulate' set the cell up "
         "and are skipped when --cell or --example is given",
     )
-    p.add_argument("--vary", action="append", metavar="NAME=VALUES", default=[])
+    p.add_argument(
+        "--vary",
+        action="append",
+        metavar="NAME=VALUES",
+        default=[],
+        help="a parameter and its values (below); once per parameter",
+    )
     p.add_argument("--sample", type=int, metavar="N", help="N random candidates, not the grid")
     p.add_argument("--seed", type=int, default=0, help="seed of --sample (0)")
     p.add_argument("--out", metavar="DIR", required=True, help="output folder")
-    p.add_argument("--backend", choices=("serial", "process", "ray"), default="process")
+    p.add_argument(
+        "--backend",
+        choices=("serial", "process", "ray"),
+        default="process",
+        help="one process, a local process pool (default) or Ray",
+    )
     p.add_argument("--workers", type=int, metavar="N", help="processes or Ray CPUs (one per core)")
     p.add_argument("--address", metavar="auto|HOST:PORT", help="a running Ray cluster to use")
     p.add_argument("--batch-size", type=int, metavar="N", help="candidates per task")

@@ -65,9 +65,11 @@ RESULT_COLUMNS = (
 
 
 class StudySimulator(Simulator):
-    """The simulator a candidate runs on: speeds pinned (``speeds``, rad/s) or scaled
-    (``overrides``, factors) per robot, and every Cartesian target kept in ``targets``
-    (robot, world pose, arm/elbow configuration) for the reach margin."""
+    """The simulator a candidate runs on: per robot, the speed (``speeds``, rad/s) and the
+    speed override (``overrides``, 0 < f <= 1, see :meth:`Simulator.set_override`) pinned:
+    the program's own ``set_speed`` and ``set_override`` for that robot take the study's
+    value instead; every Cartesian target kept in ``targets`` (robot, world pose,
+    arm/elbow configuration) for the reach margin."""
 
     def __init__(
         self,
@@ -83,16 +85,18 @@ class StudySimulator(Simulator):
         self._factor = dict(overrides or {})
         super().__init__(cell, mode, dt, **options)
         self.targets: list[tuple[str, Array, str | None]] = []
-        for robot in {*self._pinned, *self._factor}:
-            self.set_speed(robot, self.speed(robot))
+        for robot in sorted(self._pinned):
+            self.set_speed(robot, self._pinned[robot])
+        for robot in sorted(self._factor):
+            self.set_override(robot, self._factor[robot])
 
     def set_speed(self, robot: str, speed: float) -> None:
-        """As :meth:`Simulator.set_speed`, with the study's pinned speed or override."""
-        if robot in self._pinned:
-            speed = self._pinned[robot]
-        elif robot in self._factor and isinstance(speed, (int, float)):
-            speed = speed * self._factor[robot]
-        super().set_speed(robot, speed)
+        """As :meth:`Simulator.set_speed`, at the study's speed for a pinned robot."""
+        super().set_speed(robot, self._pinned.get(robot, speed))
+
+    def set_override(self, robot: str, override: float) -> None:
+        """As :meth:`Simulator.set_override`, at the study's override for a pinned robot."""
+        super().set_override(robot, self._factor.get(robot, override))
 
     def _keep(self, robot: str, T: ArrayLike) -> None:
         q = self.joints(robot)
@@ -107,6 +111,16 @@ class StudySimulator(Simulator):
     def move_straight_line(self, robot: str, T: ArrayLike, *args: Any, **kw: Any) -> None:
         """As :meth:`Simulator.move_straight_line`; the target is kept."""
         super().move_straight_line(robot, T, *args, **kw)
+        self._keep(robot, T)
+
+    def move_linear(self, robot: str, T: ArrayLike, **kw: Any) -> None:
+        """As :meth:`Simulator.move_linear`; the target is kept."""
+        super().move_linear(robot, T, **kw)
+        self._keep(robot, T)
+
+    def move_circular(self, robot: str, via: ArrayLike, T: ArrayLike, **kw: Any) -> None:
+        """As :meth:`Simulator.move_circular`; the target is kept."""
+        super().move_circular(robot, via, T, **kw)
         self._keep(robot, T)
 
 

@@ -1,12 +1,16 @@
 """A local pool of worker processes that streams rows back and survives worker crashes.
 
-Each worker is a fork of a *fork server*: a fresh, single-threaded Python process that
-imports the simulator once, so a new worker (at the start, or after a crash) is ready in
-milliseconds and inherits nothing of the parent's state, threads or locks (``spawn``
-where there is no fork server). Workers run with one thread for numpy's and OpenMP's
-pools and ignore SIGINT (Ctrl-C is the parent's to handle). It receives the study's setup once,
-compiles the cell, then evaluates batches of candidates, sending each row back as soon
-as it is done. The parent hands a batch to each idle worker and waits on every worker's
+How a worker starts: on Linux, from a parent that runs no other Python thread (the
+command line), it is a fork of the parent, which has the simulator imported already: it
+is ready in milliseconds. Otherwise (a notebook's kernel has threads; forking a process
+with threads can copy a lock some thread held) it is a fork of a *fork server*: a fresh,
+single-threaded process that imports the simulator once (~1-2 s, once per process), so
+later workers (after a crash, in the next study) are ready in milliseconds too; ``spawn``
+where neither exists. Workers get the parent's current environment (a fork server's
+would be that of when it started), run with one thread for numpy's and OpenMP's pools
+and ignore SIGINT (Ctrl-C is the parent's to handle). Each receives the study's setup
+once, compiles the cell, then evaluates batches of candidates, sending each row back as
+soon as it is done. The parent hands a batch to each idle worker and waits on every worker's
 pipe and process at once.
 
 When a worker dies (a crash in native code, ``os._exit``, the OOM killer), the candidate
@@ -25,6 +29,8 @@ import multiprocessing as mp
 import os
 import pickle
 import signal
+import sys
+import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -107,9 +113,26 @@ def stop_fork_server() -> None:
             finalizer()  # what would run at exit: remove the folder, forget it
 
 
+def _only_thread() -> bool:
+    """True when this process runs no Python thread but the main one, after stopping
+    tqdm's monitor thread (any tqdm bar, even a hidden one, starts it; a new bar starts
+    it again)."""
+    from tqdm import tqdm
+
+    monitor = tqdm.monitor
+    if monitor is not None and threading.active_count() == 2:
+        monitor.exit()
+        tqdm.monitor = None
+    return threading.active_count() == 1
+
+
 def _context() -> Any:
-    """The fork server's context (preloading the simulator), else spawn's."""
-    if "forkserver" in mp.get_all_start_methods():
+    """Fork from a single-threaded parent on Linux, else the fork server's context
+    (preloading the simulator), else spawn's (module doc)."""
+    methods = mp.get_all_start_methods()
+    if sys.platform == "linux" and "fork" in methods and _only_thread():
+        return mp.get_context("fork")
+    if "forkserver" in methods:
         ctx = mp.get_context("forkserver")
         ctx.set_forkserver_preload(["workcell.study.evaluation"])
         return ctx
@@ -139,6 +162,7 @@ class ProcessPool:
         self._cpu0: dict[int, float] = {}
         self.crashes = 0
         self._ctx = _context()
+        self.start_method: str = self._ctx.get_start_method()
 
     def _start(self) -> _Worker:
         parent, child = self._ctx.Pipe(duplex=True)

@@ -105,7 +105,7 @@ class ScriptProgram(Program):
         lines = list(enumerate(text.splitlines(), 1))
         split = 0
         for i, line in lines:
-            commands = parse_line(line)
+            commands = list(parse_line(line))
             sims = [c for c in commands if isinstance(c, Simulate)]
             if sims and not split:
                 split = i
@@ -147,7 +147,7 @@ class ScriptProgram(Program):
         from workcell.program.session import Session
 
         if self._parsed is None:
-            self._parsed = [(i, ln, parse_line(ln)) for i, ln in self.body]
+            self._parsed = [(i, ln, list(parse_line(ln))) for i, ln in self.body]
         interp = Interpreter(Session(sim=sim, base_dir=self.base_dir), _quiet)
         for i, line, commands in self._parsed:
             for c in commands:

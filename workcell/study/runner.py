@@ -49,6 +49,12 @@ class Outcome:
         return self.evaluated / self.wall_s if self.wall_s > 0 else 0.0
 
 
+class _Bar(tqdm):
+    """tqdm without its monitor thread (a parent with no other thread forks its workers)."""
+
+    monitor_interval = 0
+
+
 def _best_text(best: dict[str, Any] | None) -> str:
     if best is None:
         return "best: none feasible yet"
@@ -80,7 +86,7 @@ def execute(
     best = next(iter(best_rows(store.table(), 1)), None)
     show = (os.isatty(2) if progress is None else progress) and bool(todo)
     t0 = time.perf_counter()
-    with tqdm(
+    with _Bar(
         total=len(every), initial=resumed, unit="cand", desc="study", disable=not show, leave=True
     ) as bar:
         bar.set_postfix_str(_best_text(best))

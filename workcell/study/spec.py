@@ -9,7 +9,8 @@ A parameter is named ``THING.FIELD`` after a robot or a part of the cell:
                                 takes: puma260, puma560, and the library's robots)
 ``ROBOT.speed``        rad/s    the robot's speed, pinned: the program's own
                                 ``set_speed`` calls for this robot are overridden
-``ROBOT.override``     0..1     a factor on every speed the program sets (1: as written)
+``ROBOT.override``     0..1     the robot's speed override (``Simulator.set_override``:
+                                speeds x f, accelerations x f^2, jerks x f^3), pinned
 ``PART.x|y|z``         m        a static or movable part's frame position in the world
 ``PART.yaw``           deg      the part's rotation about the world's vertical
 =====================  =======  =====================================================
