@@ -35,6 +35,19 @@ def test_one_joint_takes_the_seven_phase_minimum_time(D, v, a, j):
     assert m.duration == pytest.approx(seven_phase_time(D, v, a, j), rel=1e-9, abs=1e-12)
 
 
+@pytest.mark.parametrize(("a", "j"), [(5.235987755982989, 52.35987755982989), (2.0, 40.0)])
+def test_a_move_on_the_boundary_between_profile_shapes_is_planned(a, j):
+    # D = 2 a^3 / j^2: the acceleration just reaches its limit (ruckig 0.19 raised here;
+    # found by hypothesis on a Puma 260 under override: 6 deg on joint 3)
+    D = 2 * a**3 / j**2
+    for q0 in (0.0, -2.409223277464779):
+        m = plan_move(
+            np.array([q0]), np.array([q0 + D]), speed=1.0, dt=0.01, profile="jerk",
+            limits=Limits(np.array([10.0]), np.array([a]), np.array([j])),
+        )  # fmt: skip
+        assert m.duration == pytest.approx(seven_phase_time(D, 10.0, a, j), rel=1e-6)
+
+
 @SETTINGS
 @given(
     d=st.lists(st.floats(-3.0, 3.0), min_size=6, max_size=6),

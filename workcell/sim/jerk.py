@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
+from ruckig import InputParameter, Result, Ruckig, RuckigError, Synchronization, Trajectory
 
 from workcell.errors import ProgramError
 from workcell.robots.robot import Robot
@@ -149,16 +149,26 @@ def plan_jerk(
         inp.target_velocity = v1.tolist()
     if a1 is not None:
         inp.target_acceleration = a1.tolist()
-    inp.max_velocity = limits.speed.tolist()
-    inp.max_acceleration = limits.acceleration.tolist()
-    inp.max_jerk = limits.jerk.tolist()
     if rest:
         inp.synchronization = Synchronization.Phase
     traj = Trajectory(n)
-    try:
-        res = otg.calculate(inp, traj)
-    except RuntimeError as exc:  # ruckig raises on input it cannot take
-        raise ProgramError(f"no jerk-limited motion between these states: {exc}") from exc
-    if res not in (Result.Working, Result.Finished):
-        raise ProgramError(f"no jerk-limited motion between these states (ruckig: {res})")
+    res, error = None, ""
+    # ruckig 0.19 fails on some moves that lie exactly on the boundary between two profile
+    # shapes (a distance of exactly 2 a^3 / j^2: the acceleration just reaches its limit);
+    # the same move with the acceleration and jerk limits a hair lower (1e-9, relative)
+    # is off the boundary, keeps every limit and is slower by ~1e-9 of its time
+    for shrink in (1.0, 1.0 - 1e-9, 1.0 - 1e-7):
+        inp.max_velocity = limits.speed.tolist()
+        inp.max_acceleration = (limits.acceleration * shrink).tolist()
+        inp.max_jerk = (limits.jerk * shrink).tolist()
+        try:
+            res = otg.calculate(inp, traj)
+        except (RuntimeError, RuckigError) as exc:  # ruckig raises on input it cannot take
+            error = str(exc).strip().splitlines()[0]
+            continue
+        if res in (Result.Working, Result.Finished):
+            break
+        error = f"ruckig: {res}"
+    else:
+        raise ProgramError(f"no jerk-limited motion between these states ({error})")
     return JerkMove(traj, limits, np.asarray(q0, float), np.asarray(q1, float))
