@@ -65,7 +65,7 @@ def _run(name: str, cwd: Path) -> tuple[str, list[np.ndarray]]:
     # Python), whatever "python3" kernels the user or the system has installed
     km = KernelManager(kernel_name="python3", kernel_spec_manager=KernelSpecManager(kernel_dirs=[]))
     assert km.kernel_spec.argv[0] == sys.executable
-    km.connection_file = str(cwd / "kernel.json")  # not a tmpXXXX.json in the system's /tmp
+    km.connection_file = str(cwd / "kernel.json")  # not a tmp*.json file in the system's /tmp
     client = NotebookClient(
         nb, km=km, timeout=120, resources={"metadata": {"path": str(cwd)}}, allow_errors=False
     )

@@ -29,6 +29,7 @@ Orientation laws extend beyond a piece's ends (slerp with fractions outside [0, 
 
 from __future__ import annotations
 
+import abc
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -87,7 +88,7 @@ def slerp(R0: Array, R1: Array, s: Array) -> Array:
     return R0 @ R
 
 
-class Piece:
+class Piece(abc.ABC):
     """A piece of a path: tool point and orientation as functions of u in [0, span]."""
 
     span: float  # m of path parameter
@@ -95,21 +96,21 @@ class Piece:
     angle: float  # rad of orientation change
     max_step: float = math.inf  # m: samples of a curved piece are at most this far apart
 
+    @abc.abstractmethod
     def points(self, u: Array) -> Array:
         """Tool points (k, 3) at parameters u (k,)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def rotations(self, u: Array) -> Array:
         """Tool orientations (k, 3, 3) at parameters u (any real u: the law continues)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def tangents(self, u: Array) -> Array:
         """Unit tangents (k, 3) of the tool point's path at u."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def curvatures(self, u: Array) -> Array:
         """Curvature vectors (k, 3) at u: the principal normal over the radius (1/m)."""
-        raise NotImplementedError
 
 
 class Line(Piece):
