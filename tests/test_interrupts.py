@@ -98,3 +98,22 @@ def test_sigterm_while_writing_the_recording_leaves_no_temp_file(tmp_path):
     assert temp_files(tmp_path) == []
     if p.returncode != 0:
         assert not (tmp_path / "run.rrd").exists()
+
+
+def test_ctrl_c_while_the_command_is_still_starting_prints_one_line(tmp_path):
+    # `workcell robots` imports the simulator stack (MuJoCo, trimesh, ...) for about a
+    # second before it prints anything: Ctrl-C 0.3 s after start lands in those imports
+    p = subprocess.Popen(
+        [sys.executable, "-m", "workcell.cli", "robots"],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        # as from a terminal: Ctrl-C not ignored (a background job of a script inherits
+        # SIGINT ignored, and Python then keeps ignoring it)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    time.sleep(0.3)
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=60)
+    assert (p.returncode, out, err) == (130, "", "workcell: interrupted\n")

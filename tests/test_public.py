@@ -162,3 +162,31 @@ def test_demo_solids_json(tmp_path, capsys):
         if r["exact_volume"] is not None:
             assert r["volume"] == pytest.approx(r["exact_volume"], rel=1e-12), r["name"]
     assert out_file.exists()
+
+
+@pytest.mark.slow
+def test_every_module_imports_first_in_a_fresh_interpreter_and_the_package_is_light():
+    # `import workcell` loads its names on first use (the command line starts fast and
+    # its Ctrl-C handling covers the heavy imports), so each module may be the first one
+    # imported: no import cycle may depend on the order (the simulator and its planning
+    # mixins import each other's modules). One interpreter imports each module afresh.
+    names = sorted(
+        ".".join(p.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__")
+        for p in (ROOT / "workcell").rglob("*.py")
+    )
+    code = (
+        "import importlib, sys\n"
+        "import workcell\n"
+        "assert 'mujoco' not in sys.modules and 'trimesh' not in sys.modules\n"
+        "base = set(sys.modules)\n"
+        f"for name in {names!r}:\n"
+        "    for m in set(sys.modules) - base:\n"
+        "        if m.startswith('workcell'):\n"
+        "            del sys.modules[m]\n"
+        "    importlib.import_module(name)\n"
+    )
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import signal
 import sys
 import time
 from pathlib import Path
@@ -253,7 +254,36 @@ def add_record_fps(parser: argparse.ArgumentParser) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``workcell`` command."""
+    """Entry point of the ``workcell`` command (Ctrl-C at any moment: one line, status 130).
+
+    While the subcommands' modules are imported (MuJoCo, trimesh, ...: about a second), a
+    Ctrl-C is held until the imports are done: some extension modules turn an interrupt
+    in their initialisation into an ImportError, or lose it.
+    """
+    held: list[int] = []
+    previous = signal.getsignal(signal.SIGINT)
+    hold = previous is signal.default_int_handler  # not when Ctrl-C is ignored or handled
+    if hold:
+        signal.signal(signal.SIGINT, lambda signum, frame: held.append(signum))
+    try:
+        parser = _parser()
+    finally:
+        if hold:
+            signal.signal(signal.SIGINT, previous)
+    if held:
+        return _interrupted()
+    return run_command(parser.parse_args(argv))
+
+
+def _interrupted() -> int:
+    # objects half-built when the interrupt came may fail in their finalizers on the way
+    # out; that is no news after Ctrl-C: keep the one line
+    sys.unraisablehook = lambda unraisable: None
+    print("workcell: interrupted", file=sys.stderr)
+    return 130
+
+
+def _parser() -> argparse.ArgumentParser:
     from workcell import __version__
 
     parser = argparse.ArgumentParser(
@@ -331,8 +361,7 @@ def main(argv: list[str] | None = None) -> int:
     export_cell.set_defaults(func=_export_cell)
     for module in SUBCOMMAND_MODULES:
         importlib.import_module(module).register(sub)
-    args = parser.parse_args(argv)
-    return run_command(args)
+    return parser
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -353,11 +382,7 @@ def run_command(args: argparse.Namespace) -> int:
         print(f"workcell: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        # objects half-built when the interrupt came may fail in their finalizers on the
-        # way out; that is no news after Ctrl-C: keep the one line
-        sys.unraisablehook = lambda unraisable: None
-        print("workcell: interrupted", file=sys.stderr)
-        return 130
+        return _interrupted()
 
 
 if __name__ == "__main__":

@@ -8,14 +8,18 @@
 - :mod:`workcell.plan.support`, :mod:`workcell.plan.resting`: what parts rest on;
 - :mod:`workcell.plan.scenes`: seeded random planning problems and an independent re-check.
 
-The simulator mixes these in. The names below are imported on first use (the package
-imports no module up front, so ``workcell.sim`` can use them without a cycle).
+The simulator mixes these in, and they use the simulator's modules: the simulator is
+imported first (below), so that whichever module is imported first, ``workcell.sim``
+finishes loading these mixins before they are used. The names below are imported on
+first use.
 """
 
 from __future__ import annotations
 
 import importlib
 from typing import Any
+
+import workcell.sim  # noqa: F401  (first: see the module doc)
 
 __all__ = ["PlanningError", "PlanningOptions", "PlanningScene", "plan_path", "random_problem"]
 
