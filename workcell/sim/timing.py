@@ -17,8 +17,8 @@
    parametrizer (toppra's default spline output overshoots acceleration limits by
    ~10 %): the tool runs at the programmed speed wherever the joints allow and slows down
    where they do not (near a singularity) instead of breaking a limit;
-4. checks: the joints' limits again between the knots (quarters and middles, and next to
-   the knots of intervals whose joint rates change fast); where one would be passed the
+4. checks: the joints' limits again between the knots (middles, and the quarters and
+   next to the knots of intervals whose joint rates change fast); where one would be passed the
    points become knots and the path is timed again; then the frames themselves (finite
    differences) must keep the limits, else the path is timed again with the bounds
    tightened by the excess;
@@ -156,9 +156,9 @@ def time_path(
     (None: only the joints). Returns None when no time law exists (a start speed that
     cannot be brought to rest). ``scale`` (<= 1) tightens the joints' bounds further.
 
-    The joints' limits are checked again between knots (at the quarters and the middle of
-    each interval, near the ends of intervals where a joint's rate changes fast: exact IK
-    there, the time law's speed and acceleration): where the path bends so fast that a
+    The joints' limits are checked again between knots (at the middle of each interval,
+    at the quarters and near the ends of intervals where a joint's rate changes fast: exact
+    IK there, the time law's speed and acceleration): where the path bends so fast that a
     joint would pass its limit between knots (a tight corner, a singularity near), those
     points become knots and the path is timed again (up to ``refinements`` times)."""
     _toppra()
@@ -170,7 +170,7 @@ def time_path(
         law = _time_once(robot, base_inv, path, Q, s_knots, vj, aj, speed, acceleration, sd_start)
         if law is None or attempt == refinements:
             return law
-        # check points: the quarters and the middle of every interval
+        # check points: every interval's middle, more where the joint rates change fast
         idx, frac = _check_points(law.spline)
         pts = s_knots[idx] + frac * (s_knots[idx + 1] - s_knots[idx])
         Qm, err = refine_ik(robot, law.spline(pts)[:, :-1], base_inv @ path.poses(pts))
@@ -256,16 +256,17 @@ def _frame_ratio(t: Array, rows: Array, q_before: Array | None, limits: Limits) 
 
 def _check_points(jp: JointPath) -> tuple[NDArray[np.intp], Array]:
     """Interval index and fraction of the points where :func:`time_path` checks the limits
-    again: each interval's quarters and middle, and near both ends of the intervals over
-    which a joint's rate along the path changes by a third or more (towards a
-    singularity the joints' speeds grow fastest right next to a knot)."""
+    again: each interval's middle, and its quarters and near both ends for the intervals
+    over which a joint's rate along the path changes by a third or more (towards a
+    singularity the joints' speeds grow fastest right next to a knot; elsewhere the
+    rates vary smoothly and the frames are checked once more in :func:`timed_frames`)."""
     n = len(jp.s) - 1
     d1 = np.abs(jp.dW[:, :-1])
     change = np.abs(np.diff(jp.dW[:, :-1], axis=0)) / np.maximum(np.maximum(d1[:-1], d1[1:]), 1e-9)
     steep = np.flatnonzero(change.max(axis=1) > 1.0 / 3.0)
-    idx = np.concatenate([np.repeat(np.arange(n), 3), np.repeat(steep, 4)])
+    idx = np.concatenate([np.arange(n), np.repeat(steep, 6)])
     frac = np.concatenate(
-        [np.tile([0.25, 0.5, 0.75], n), np.tile([0.02, 0.1, 0.9, 0.98], len(steep))]
+        [np.full(n, 0.5), np.tile([0.02, 0.1, 0.25, 0.75, 0.9, 0.98], len(steep))]
     )
     order = np.argsort(idx + frac, kind="stable")
     return idx[order], frac[order]
