@@ -70,6 +70,8 @@ MODULES = [
     "workcell.sim",
     "workcell.sim.timeline",
     "workcell.sim.simulator",
+    "workcell.sim.frames",
+    "workcell.sim.readback",
     "workcell.sim.cartesian",
     "workcell.sim.contacts",
     "workcell.sim.grasp",
