@@ -82,6 +82,7 @@ MODULES = [
     "workcell.sim.concurrent",
     "workcell.checks",
     "workcell.sim.physics",
+    "workcell.sim.physics_events",
     "workcell.sim.physics_result",
     "workcell.sim.physics_support",
     "workcell.program",
