@@ -79,6 +79,8 @@ MODULES = [
     "workcell.sim.profiles",
     "workcell.sim.tasks",
     "workcell.sim.planning",
+    "workcell.sim.paths",
+    "workcell.sim.pieces",
     "workcell.sim.concurrent",
     "workcell.checks",
     "workcell.sim.physics",
