@@ -66,6 +66,8 @@ MODULES = [
     "workcell.decompose",
     "workcell.cell",
     "workcell.cell.workcell",
+    "workcell.cell.items",
+    "workcell.cell.cell_json",
     "workcell.cell.compile",
     "workcell.sim",
     "workcell.sim.timeline",
