@@ -349,11 +349,15 @@ class Workcell:
         return translation(*self.model.properties(p.entity).centroid)
 
     # ------------------------------------------------------------------ storage
-    def to_dict(self, base_dir: str | os.PathLike | None = None) -> dict:
+    def to_dict(
+        self, base_dir: str | os.PathLike | None = None, *, kinematics: bool = False
+    ) -> dict:
         """The cell as JSON-able data. A robot is its library name, its robot file
         (path relative to ``base_dir`` when given, else absolute) or its chain inline
-        (:mod:`workcell.cell.robot_json`); ModelError for one that cannot be saved."""
-        return cell_to_dict(self, base_dir)
+        (:mod:`workcell.cell.robot_json`); ModelError for one that cannot be saved.
+        ``kinematics``: a robot file's entry also carries the robot's kinematics, for a
+        reader without the file (what a server sends its clients)."""
+        return cell_to_dict(self, base_dir, kinematics=kinematics)
 
     @classmethod
     def from_dict(
