@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from workcell.cell.items import _NAME_RE
-from workcell.cell.robot_json import robot_from_json, robot_json
+from workcell.cell.robot_json import kinematics_json, robot_from_json, robot_json
 from workcell.errors import ModelError, WorkcellError
 from workcell.modeller.model import MAX_NAME_LENGTH, Model
 
@@ -31,10 +31,14 @@ FORMAT = "workcell-cell"
 VERSION = 1
 
 
-def cell_to_dict(cell: Workcell, base_dir: str | os.PathLike | None = None) -> dict:
+def cell_to_dict(
+    cell: Workcell, base_dir: str | os.PathLike | None = None, *, kinematics: bool = False
+) -> dict:
     """The cell as JSON-able data. A robot is its library name, its robot file
     (path relative to ``base_dir`` when given, else absolute) or its chain inline
-    (:mod:`workcell.cell.robot_json`); ModelError for one that cannot be saved."""
+    (:mod:`workcell.cell.robot_json`); ModelError for one that cannot be saved.
+    ``kinematics``: a robot file's entry also carries the robot's kinematics, for a
+    reader without the file (a server's reply to a client on another machine)."""
     robots = []
     folder = None if base_dir is None else Path(os.path.abspath(base_dir))
     for r in cell.robots.values():
@@ -44,6 +48,8 @@ def cell_to_dict(cell: Workcell, base_dir: str | os.PathLike | None = None) -> d
         else:
             try:
                 entry.update(robot_json(r.bare or r.robot, folder))
+                if kinematics and "file" in entry:
+                    entry["kinematics"] = kinematics_json(r.bare or r.robot)
             except ModelError as exc:
                 raise ModelError(f"robot '{r.name}' cannot be saved: {exc}") from exc
         entry["gripper"] = None if r.gripper_parameters is None else dict(r.gripper_parameters)
