@@ -25,7 +25,7 @@ from workcell.modeller.meshprops import MassProperties, mass_properties, orient_
 from workcell.spatial import det3
 
 if TYPE_CHECKING:
-    from workcell.modeller.model import _Entity
+    from workcell.modeller.entities import _Entity
 
 __all__ = ["WorldPart", "facet_estimate", "merge_vertices", "place_mesh"]
 
