@@ -367,10 +367,13 @@ def test_parts_sunk_deeper_than_the_tolerance_collide():
 
 
 def test_the_contact_model_keeps_the_geometry():
-    """Margins and gaps 0 (MuJoCo needs margin + gap >= 0); the compiled model untouched."""
+    """Margins and gaps 0 (MuJoCo needs margin + gap >= 0), one contact per pair of pieces;
+    the compiled model untouched."""
     cc = compile_cell(resting_cell(0.0))
     cc.model.geom_margin[:] = 0.01  # e.g. an imported robot's margins
     m = contact_model(cc.model)
     assert np.all(m.geom_margin == 0.0)
     assert np.all(m.geom_gap == 0.0)
     assert np.all(cc.model.geom_margin == 0.01)
+    assert m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_MULTICCD
+    assert not cc.model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_MULTICCD
