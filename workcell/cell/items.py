@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell.checks import checked_name
 from workcell.errors import ModelError
 from workcell.modeller.model import MAX_NAME_LENGTH
 from workcell.robots import attach_gripper, get, library, parallel_gripper
@@ -76,13 +77,8 @@ Array = NDArray[np.float64]
 
 def check_cell_name(name: object, kind: str = "item") -> str:
     """Return ``name`` if it is a valid (MJCF-safe) cell name, else raise ModelError."""
-    if not isinstance(name, str) or len(name) > MAX_NAME_LENGTH or not _NAME_RE.fullmatch(name):
-        shown = repr(name) if len(repr(name)) <= 60 else repr(name)[:57] + "..."
-        raise ModelError(
-            f"invalid {kind} name {shown}: use a letter or '_' followed by letters, digits, "
-            f"'_' or '-' (no '.', no '/'), at most {MAX_NAME_LENGTH} characters"
-        )
-    return name
+    rule = "use a letter or '_' followed by letters, digits, '_' or '-' (no '.', no '/')"
+    return checked_name(name, _NAME_RE, f"{kind} name", rule, MAX_NAME_LENGTH)
 
 
 @dataclass(frozen=True, eq=False)

@@ -241,14 +241,16 @@ class Workcell:
     def add_robot(
         self,
         name: str,
-        robot: str | Robot = "puma260",
+        robot: str | Robot | RobotPlacement = "puma260",
         *,
         gripper: Mapping[str, Any] | bool | None = None,
         base: ArrayLike | None = None,
         q: ArrayLike | None = None,
     ) -> RobotPlacement:
         """Add a robot: a library name (``workcell.robots.library()``: "ur5e", "puma260",
-        "kuka_kr6_r700", ...) or a :class:`Robot`.
+        "kuka_kr6_r700", ...), a :class:`Robot`, or the :class:`RobotPlacement` of another
+        cell (its robot as placed, saved as it was: library name, gripper, file; ``base``
+        and ``q`` default to the placement's; ``gripper`` must be None).
 
         ``gripper``: True for the default :func:`parallel_gripper`, a mapping of its
         parameters, or None for none (a ``Robot`` may already carry one). ``base`` (4x4
@@ -270,8 +272,17 @@ class Workcell:
             raise ModelError(
                 f"{what}: gripper must be True, None or a mapping of parallel_gripper parameters"
             )
+        bare: Robot | None = None
+        if isinstance(robot, RobotPlacement):
+            if params is not None:
+                raise ModelError(f"{what}: a placed robot keeps its gripper; give gripper=None")
+            base = robot.base if base is None else base
+            q = robot.q if q is None else q
+            params, bare = robot.gripper_parameters, robot.bare
         try:
-            if isinstance(robot, str):
+            if isinstance(robot, RobotPlacement):
+                builtin, r = robot.builtin, robot.robot
+            elif isinstance(robot, str):
                 builtin: str | None = robot
                 r = build_robot(robot, params)
             elif isinstance(robot, Robot):
@@ -293,7 +304,8 @@ class Workcell:
             qv = r.check_limits(q0).copy()
         except WorkcellError as exc:
             raise ModelError(f"{what}: initial q: {exc}") from exc
-        bare = robot if isinstance(robot, Robot) and r is not robot else None
+        if isinstance(robot, Robot) and r is not robot:
+            bare = robot
         placed = RobotPlacement(name, r, B, qv, builtin, params, bare)
         self._robots[name] = placed
         return placed

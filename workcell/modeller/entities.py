@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from workcell.checks import checked_name
 from workcell.errors import ModelError
 
 if TYPE_CHECKING:
@@ -183,13 +184,8 @@ def check_name(name: object) -> str:
     A name is a letter or '_' followed by letters, digits, '_', '.' or '-' (ASCII, so
     printable), at most :data:`MAX_NAME_LENGTH` (128) characters.
     """
-    if not isinstance(name, str) or len(name) > MAX_NAME_LENGTH or not _NAME_RE.fullmatch(name):
-        shown = repr(name) if len(repr(name)) <= 60 else repr(name)[:57] + "..."
-        raise ModelError(
-            f"invalid name {shown}: use a letter or '_' followed by letters, digits, '_', '.' "
-            f"or '-', at most {MAX_NAME_LENGTH} characters"
-        )
-    return name
+    rule = "use a letter or '_' followed by letters, digits, '_', '.' or '-'"
+    return checked_name(name, _NAME_RE, "name", rule, MAX_NAME_LENGTH)
 
 
 def check_colour(colour: ArrayLike) -> tuple[float, ...]:
