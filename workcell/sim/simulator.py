@@ -193,7 +193,7 @@ class Simulator(
         self.joint_by_joint_clock = joint_by_joint_clock
         self.compiled = compile_cell(cell) if compiled is None else compiled
         # the simulator's own copy (grasps write its eq_data; contacts use its margins)
-        self.model: mujoco.MjModel = contact_model(self.compiled.model, float(contact_tolerance))
+        self.model: mujoco.MjModel = contact_model(self.compiled.model)
         self.data = mujoco.MjData(self.model)
         mujoco.mj_kinematics(self.model, self.data)
         self._qadr: dict[str, NDArray[np.intp]] = {}
