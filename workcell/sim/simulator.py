@@ -81,7 +81,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell import limits
-from workcell.cell.compile import CompiledCell, compile_cell
+from workcell.cell.compile import CompiledCell, compile_cell, subtree_bodies
 from workcell.cell.workcell import Workcell
 from workcell.checks import is_finite_number, quote_angle
 from workcell.errors import (
@@ -216,10 +216,7 @@ class Simulator(
             for r, js in cc.finger_joints.items()
         }
         self._gripper: dict[str, int] = {r: m.body(b).id for r, b in cc.gripper_bodies.items()}
-        self._gripper_tree = {
-            r: {b for b in range(m.nbody) if self._in_subtree(b, g)}
-            for r, g in self._gripper.items()
-        }
+        self._gripper_tree = {r: set(subtree_bodies(m, g)) for r, g in self._gripper.items()}
         self._weld = {k: m.equality(e).id for k, e in cc.welds.items()}
         self._boxes = {p: cell.bounding_box(p) for p in cell.movable_parts}
         self._centroids = {p: cell.centroid_frame(p)[:3, 3] for p in cell.movable_parts}
@@ -235,13 +232,6 @@ class Simulator(
         if self.check_collisions:
             mujoco.mj_collision(m, self.data)
             self._contact_events(0.0, self.contacts.penetrations(self.data), stop=False)
-
-    def _in_subtree(self, body: int, root: int) -> bool:
-        while body > 0:
-            if body == root:
-                return True
-            body = int(self.model.body_parentid[body])
-        return False
 
     # ------------------------------------------------------------------ commands
     def set_speed(self, robot: str, speed: float) -> None:
