@@ -131,7 +131,9 @@ def _detect(robot: Robot) -> _Solver | str:
             post=post,
             t_end=tuple(float(v) for v in model.end[:3, 3]),
             floats=deviation <= _ORTHO_TOL,
-            ref0=tuple(float(s) * 0.0 - float(o) for s, o in zip(model.signs, model.offsets, strict=True)),
+            ref0=tuple(
+                float(s) * 0.0 - float(o) for s, o in zip(model.signs, model.offsets, strict=True)
+            ),
             joints=tuple(
                 zip(
                     robot._lo.tolist(),
@@ -262,7 +264,6 @@ def ik_report(
             (math.sqrt(ep), 2.0 * math.asin(min(1.0, math.sqrt((ex + ey + ez) / 8.0))))
             for ex, ey, ez, ep in (D * D).sum(axis=1).tolist()
         ]
-    in_limits = flags.count(None)
     rows_q = list(Qw)
     parts: Any = zip(sols, errors, flags, rows_q, strict=True)
     if ref is not None:
@@ -270,20 +271,23 @@ def ik_report(
         far, total = dist.max(axis=1).tolist(), dist.sum(axis=1).tolist()
         order = sorted(range(m), key=lambda i: (flags[i] is not None, far[i], total[i], sols[i][0]))
         parts = [(sols[i], errors[i], flags[i], rows_q[i]) for i in order]
-    elif in_limits != m:  # within limits first, each group in slot order
-        parts = sorted(parts, key=lambda p: p[2] is not None)
-    out = []
+    out = []  # within limits first, each group in slot order (or nearest first)
+    outside = []
     new = _new_solution
     for (slot, _, singular), (dp, dr), bad, q in parts:
         if bad is not None:
             why = limits_reason(bad)
-        elif dp > EXACT_TOL or dr > EXACT_TOL:
+            sol = (q, False, CONFIGS[slot], False, singular, dp, dr, 0, why, _CF)
+            outside.append(new(IKSolution, sol))
+            continue
+        why = ""
+        if dp > EXACT_TOL or dr > EXACT_TOL:
             why = f"pose not reached exactly: errors {dp:.1e} m, {dr:.1e} rad"
-        else:
-            why = ""
         out.append(
-            new(IKSolution, (q, not why, CONFIGS[slot], bad is None, singular, dp, dr, 0, why, _CF))
+            new(IKSolution, (q, not why, CONFIGS[slot], True, singular, dp, dr, 0, why, _CF))
         )
+    in_limits = len(out)
+    out += outside
     if not in_limits:
         reason = f"no solution within the joint limits ({m} found outside them)"
     return out, reason
