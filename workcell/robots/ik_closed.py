@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 import weakref
 from dataclasses import dataclass
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -71,6 +72,7 @@ _ORTHO_TOL = 1e-13  # |R^T R - I| of base and tool below which errors are measur
 _CF = "closed-form"
 _INV_TWO_PI = 1.0 / (2.0 * math.pi)
 _NO_NEAR: tuple[float | None, ...] = (None,) * 6
+_chain = chain.from_iterable
 _new_solution = tuple.__new__  # IKSolution from a full tuple: skips the named tuple's __new__
 
 
@@ -255,7 +257,7 @@ def ik_report(
             qs = [q for q, k in zip(qs, keep, strict=True) if k]
             flags = [f for f, k in zip(flags, keep, strict=True) if k]
     m = len(qs)
-    Qw = np.array(qs)
+    Qw = np.fromiter(_chain(qs), np.float64, 6 * m).reshape(m, 6)  # np.array(qs), faster
     if S.floats:
         errors = S.errors(S.model, qs, rows, S.t_end)
     else:  # through the robot's own chain, which applies base and tool as they are

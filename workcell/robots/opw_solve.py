@@ -48,11 +48,6 @@ Solution = tuple[int, tuple[float, float, float, float, float, float], bool]
 """(slot in CONFIGS: 4 r + 2 d + f, OPW angles theta1..6 (rad), singular)."""
 
 
-def _constants(m: OPWModel) -> tuple[float, float, float]:
-    L, gamma = m.forearm
-    return L, gamma, m.signs[4]
-
-
 def _unreachable(m: OPWModel, rho: float, far: bool) -> str:
     L = m.forearm[0]
     if far:
@@ -76,7 +71,7 @@ def solve_one(
     """
     (r00, _r01, r02, px), (r10, _r11, r12, py), (r20, _r21, r22, pz) = M
     a1, b, c1, c2 = m.a1, m.b, m.c1, m.c2
-    L, gamma, s5 = _constants(m)
+    (L, gamma), s5 = m.forearm, m.signs[4]
     cos, sin, atan2, sqrt = math.cos, math.sin, math.atan2, math.sqrt
     r2 = px * px + py * py
     xs2 = r2 - b * b
@@ -95,6 +90,8 @@ def solve_one(
     phi = t1_ref if shoulder_free else atan2(py, px)
     v = pz - c1
     cc = c2 * c2 + L * L
+    twice = 2.0 * c2 * L
+    acos, hypot = math.acos, math.hypot
     out: list[Solution] = []
     reasons: list[str] = []
     shoulder = shoulder_free or xs < SINGULAR_TOL * max(sqrt(r2), 1e-300)
@@ -104,14 +101,14 @@ def solve_one(
         t1 = phi - atan2(b, x)
         u = x - a1
         rho2 = u * u + v * v
-        ck = (rho2 - cc) / (2.0 * c2 * L)
+        ck = (rho2 - cc) / twice
         if ck > 1.0 or ck < -1.0:
             rho = sqrt(rho2)
             if rho > c2 + L + REACH_TOL or rho < abs(c2 - L) - REACH_TOL:
                 reasons.append(_unreachable(m, rho, rho > c2 + L))
                 continue
             ck = 1.0 if ck > 1.0 else -1.0  # on the boundary, up to rounding
-        kappa = math.acos(ck)
+        kappa = acos(ck)
         bend = _PI - kappa if kappa > _PI - kappa else kappa  # min(kappa, pi - kappa)
         elbow = bend < SINGULAR_TOL  # stretched or folded
         if bend < DEGENERATE:
@@ -128,7 +125,7 @@ def solve_one(
             c23, s23 = cos(t23), sin(t23)
             m02, m12, m22 = c23 * a2_ - s23 * r22, b2, s23 * a2_ + c23 * r22
             m00, m10, m20 = c23 * a0 - s23 * r20, b0, s23 * a0 + c23 * r20
-            s5abs = math.hypot(m02, m12)
+            s5abs = hypot(m02, m12)
             if s5abs < ALIGNED_TOL:
                 t4, t5 = t4_ref, (0.0 if m22 > 0.0 else _PI)
             else:
@@ -155,7 +152,7 @@ def solve_one(
 def letters(m: OPWModel, theta: Array) -> str:
     """Configuration letters of the OPW angles theta (6,) rad (module doc of opw)."""
     _t1, t2, t3, _, t5, _ = (float(t) for t in theta)
-    L, gamma, s5 = _constants(m)
+    (L, gamma), s5 = m.forearm, m.signs[4]
     t23 = t2 + t3
     ex, ez = m.c2 * math.sin(t2), m.c2 * math.cos(t2)  # elbow from the shoulder
     u = ex + L * math.sin(t23 + gamma)
@@ -255,7 +252,7 @@ def solve_batch(
     whether each slot exists (N, 8) and whether the pose is degenerate (N,) (duplicates
     possible). ``ref`` (N, 6) the current OPW angles, or None."""
     N = len(M)
-    L, gamma, s5 = _constants(m)
+    (L, gamma), s5 = m.forearm, m.signs[4]
     a1, b, c1, c2 = m.a1, m.b, m.c1, m.c2
     R = M[:, :3, :3]
     px, py, pz = M[:, 0, 3], M[:, 1, 3], M[:, 2, 3]
