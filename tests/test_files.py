@@ -246,3 +246,27 @@ def test_writer_errors_are_workcell_errors_with_the_same_message_shape(tmp_path)
         atomic_path(tmp_path / "nope" / "x"),
     ):
         pass
+
+
+def test_leaves_root_refuses_links_out_and_hard_links_and_keeps_the_rest(tmp_path):
+    from workcell.files import leaves_root
+
+    root, outside = tmp_path / "root", tmp_path / "outside"
+    (root / "sub").mkdir(parents=True)
+    outside.mkdir()
+    (outside / "secret.txt").write_text("secret")
+    (root / "plain.txt").write_text("mine")
+    (root / "out").symlink_to(outside / "secret.txt")
+    (root / "in").symlink_to(root / "plain.txt")
+    os.link(outside / "secret.txt", root / "hard.txt")
+    assert leaves_root(root / "plain.txt", root) is None
+    assert leaves_root(root / "in", root) is None  # a symbolic link that stays inside
+    assert leaves_root(root / "sub" / "new.txt", root) is None  # not there yet: may be written
+    assert leaves_root(root / "sub", root) is None  # a folder (its entries are checked each)
+    assert "outside the root folder" in leaves_root(root / "out", root)
+    assert "outside the root folder" in leaves_root(root / ".." / "outside" / "x", root)
+    why = leaves_root(root / "hard.txt", root)
+    assert "2 hard links" in why
+    assert "secret" not in why
+    os.unlink(outside / "secret.txt")  # the last other name gone: one link, an ordinary file
+    assert leaves_root(root / "hard.txt", root) is None

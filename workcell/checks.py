@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
-__all__ = ["is_finite_number", "quote_angle", "quote_length"]
+from workcell.errors import ModelError
+
+__all__ = ["checked_name", "is_finite_number", "quote_angle", "quote_length", "shown"]
 
 
 def is_finite_number(x: object) -> bool:
@@ -34,3 +37,18 @@ def quote_length(m: object) -> str:
         return repr(m)
     v = float(m)
     return f"{v * 1e3:.6g} mm ({v:.4g} m)"
+
+
+def shown(v: object) -> str:
+    """``repr(v)`` for an error message, cut to 60 characters (a value a user gave may
+    be a megabyte long)."""
+    s = repr(v)
+    return s if len(s) <= 60 else s[:57] + "..."
+
+
+def checked_name(name: object, pattern: re.Pattern[str], what: str, rule: str, most: int) -> str:
+    """``name`` when it is a string matching ``pattern`` of at most ``most`` characters,
+    else ModelError: "invalid {what} {name}: {rule}, at most {most} characters"."""
+    if not isinstance(name, str) or len(name) > most or not pattern.fullmatch(name):
+        raise ModelError(f"invalid {what} {shown(name)}: {rule}, at most {most} characters")
+    return name

@@ -14,8 +14,10 @@ Reading (:func:`read_bytes`, :func:`read_text`, :func:`load_json`): bounded by t
 ``max_file_bytes`` limit (:mod:`workcell.limits`; ``/dev/zero`` stops there), and a file
 that does not parse gives the caller's error class without echoing the file's content.
 
-Confinement (:func:`resolve_inside`): a file name taken relative to a root folder, refused
-when it could lead outside it (absolute, ``~``, ``..``, hidden names, symbolic links).
+Confinement (:func:`resolve_inside`, :func:`leaves_root`): a file name taken relative to a
+root folder, refused when it could lead outside it (absolute, ``~``, ``..``, hidden names,
+symbolic links, and regular files with more than one hard link: a hard link planted in the
+root may be the same file as one anywhere else on the file system).
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ __all__ = [
     "check_folder",
     "check_writable",
     "install_sigterm_cleanup",
+    "leaves_root",
     "load_json",
     "make_folder",
     "read_bytes",
@@ -385,8 +388,32 @@ def resolve_inside(root: str | os.PathLike, name: object, *, error: Error = Work
         or any(part == ".." or part.startswith(".") for part in parts)
     ):
         raise error(f"file name {name!r} refused: {rule}")
-    real_root = os.path.realpath(os.fspath(root))
-    full = os.path.realpath(os.path.join(real_root, name))
-    if os.path.commonpath([full, real_root]) != real_root:
-        raise error(f"file name {name!r} refused: it leads outside the server's root folder")
+    full = os.path.realpath(os.path.join(os.path.realpath(os.fspath(root)), name))
+    why = leaves_root(full, root)
+    if why is not None:
+        raise error(f"file name {name!r} refused: {why}")
     return Path(full)
+
+
+def leaves_root(path: str | os.PathLike, root: str | os.PathLike) -> str | None:
+    """Why ``path`` may lead outside the folder ``root`` (None: it does not).
+
+    ``path`` resolved through symbolic links must lie inside ``root`` (resolved too); an
+    existing regular file must have one hard link only (another name of the same file
+    may lie anywhere on the file system, and nothing tells where). The reasons never
+    say whether a file outside the root exists.
+    """
+    real_root = os.path.realpath(os.fspath(root))
+    full = os.path.realpath(os.fspath(path))
+    if os.path.commonpath([full, real_root]) != real_root:
+        return "it leads outside the root folder"
+    try:
+        st = os.stat(full)
+    except OSError:
+        return None  # not there (yet): reading it fails later, writing it creates it
+    if stat.S_ISREG(st.st_mode) and st.st_nlink > 1:
+        return (
+            f"it is a file with {st.st_nlink} hard links, which may lead outside the "
+            "root folder; copy the file into the root instead"
+        )
+    return None

@@ -158,9 +158,7 @@ class MeshAssets:
         taken.add(out)
         return out
 
-    def add(
-        self, name: str, mesh: trimesh.Trimesh, inertia: mujoco.mjtMeshInertia = _EXACT
-    ) -> str:
+    def add(self, name: str, mesh: trimesh.Trimesh, inertia: mujoco.mjtMeshInertia = _EXACT) -> str:
         """Register ``mesh`` as asset ``name`` (made unique; exact inertia unless
         ``inertia`` says otherwise, see :func:`mass_inertia`); return the mesh name."""
         mname = self.unique(name, "mesh")

@@ -15,7 +15,8 @@ from hypothesis import strategies as st
 from shapely.geometry import LinearRing, Polygon
 
 from workcell.errors import GeometryError, WorkcellError
-from workcell.modeller.surface import Surface, _strictly_convex
+from workcell.modeller.contours import strictly_convex
+from workcell.modeller.surface import Surface
 
 UNIT_SQUARE = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
 BOWTIE = [(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)]
@@ -312,7 +313,7 @@ class TestRefusals:
         turns = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
         assert (turns > 0).all() or (turns < 0).all()  # the fast path cannot use the turn signs
         assert not LinearRing(star).is_simple
-        assert not _strictly_convex(star)
+        assert not strictly_convex(star)
         with pytest.raises(GeometryError, match="not simple"):
             Surface(star)
         with pytest.raises(GeometryError, match="hole 0"):
@@ -323,7 +324,7 @@ class TestRefusals:
         for step in range(2, (k - 1) // 2 + 1):
             ang = 2 * math.pi * step * np.arange(k) / k
             star = np.column_stack([np.cos(ang), np.sin(ang)])
-            assert not _strictly_convex(star)
+            assert not strictly_convex(star)
             with pytest.raises(GeometryError, match="not simple"):
                 Surface(star)
 
@@ -482,7 +483,7 @@ def test_convex_fast_path_implies_simple(pts):
     if len(p) > 1 and np.array_equal(p[0], p[-1]):
         p = p[:-1]
     assume(len(p) >= 3)
-    if _strictly_convex(p):
+    if strictly_convex(p):
         assert LinearRing(p).is_simple
         assert Polygon(p).is_valid
 
@@ -495,8 +496,8 @@ def test_convex_fast_path_accepts_convex_polygons(angles):
     assume(gaps.min() > 1e-3 and gaps.max() < math.pi - 1e-3)
     p = np.column_stack([np.cos(a), np.sin(a)])
     assert LinearRing(p).is_simple
-    assert _strictly_convex(p)
-    assert _strictly_convex(p[::-1])
+    assert strictly_convex(p)
+    assert strictly_convex(p[::-1])
     assert Surface(p).area == pytest.approx(Polygon(p).area, rel=1e-9)
 
 
@@ -514,7 +515,7 @@ def test_convex_fast_path_refuses_polygons_winding_several_times(k, winds, r, re
     if reverse:
         p = p[::-1]
     assert not LinearRing(p).is_simple
-    assert not _strictly_convex(p)
+    assert not strictly_convex(p)
     with pytest.raises(GeometryError, match="not simple"):
         Surface(p)
 
@@ -523,7 +524,7 @@ def test_convex_fast_path_refuses_a_spike():
     # found by hypothesis: all turns have one sign, but one of them doubles back (~pi)
     spike = np.array([(0.0, 0.0), (0.0, -1.0), (-4.77e-37, 0.0), (1.0, 0.0), (-1.0, -1.0)])
     assert not LinearRing(spike).is_simple
-    assert not _strictly_convex(spike)
+    assert not strictly_convex(spike)
 
 
 def test_convex_many_agrees_with_the_constructor():

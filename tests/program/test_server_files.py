@@ -65,6 +65,7 @@ def tree(tmp_path):
     (root / "link").symlink_to(outside)  # a folder link leading out
     (root / "lfile.json").symlink_to(outside / "secret.json")  # a file link leading out
     (root / "inside.json").symlink_to(root / "sub" / "target.json")  # a link that stays in
+    os.link(outside / "secret.json", root / "hard.json")  # a hard link: the same file
     return root, outside
 
 
@@ -89,6 +90,7 @@ def escaping_names(root, outside) -> list[str]:
         f"~{os.path.basename(home)}/x.json",
         "link/x.json",  # through a symbolic link to a folder outside
         "lfile.json",  # a symbolic link to a file outside
+        "hard.json",  # a hard link to a file outside
         ".hidden.json",
         "sub/.config/x.json",
         "a\x00b.json",

@@ -282,6 +282,17 @@ def test_the_server_imports_robot_files_inside_its_root(tmp_path):
             tool = attach_gripper(robot, parallel_gripper()).fk(q)
             np.testing.assert_allclose(c.tool_pose("r"), tool, atol=1e-9)
             assert c.cell.robots["r"].robot.dof == 5  # the client rebuilds the cell's robot
+            # a client on another machine has not got the file: it rebuilds the robot from
+            # the kinematics the server sends with it, and says so
+            (tmp_path / "arm.urdf").rename(tmp_path / "elsewhere.urdf")
+            c.create_cube(name="k", size=0.1)  # a command that may change the cell: refetch
+            with pytest.warns(UserWarning, match="rebuilt from the kinematics"):
+                far = c.cell.robots["r"].robot
+            np.testing.assert_allclose(far.fk(q), tool, atol=1e-12)
+            assert [j.limits for j in far.joints] == [j.limits for j in robot.joints]
+            np.testing.assert_array_equal(far.max_speeds, robot.max_speeds)
+            assert far.file is None
+            assert all(g.block.startswith("gripper.") for g in far.geometry)  # no link meshes
     finally:
         srv.stop()
 

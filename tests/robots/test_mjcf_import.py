@@ -246,6 +246,11 @@ def test_root_confines_includes_and_meshes(tmp_path):
     h = write(inside, "h.xml", '<mujoco><include file="../secret.xml"/></mujoco>')
     with pytest.raises(ModelError, match="outside the root folder"):
         from_mjcf(h, root=inside)
+    (inside / "meshes").mkdir()
+    os.link(tmp_path / "meshes" / "arm.stl", inside / "meshes" / "arm.stl")  # a hard link
+    k = write(inside, "k.xml", arm_mjcf())
+    with pytest.raises(ModelError, match="2 hard links"):
+        from_mjcf(k, root=inside)
 
 
 # ---------------------------------------------------------------------- MuJoCo Menagerie

@@ -4,6 +4,7 @@ ROS-Industrial files of the test-only rtb-data package; plus every error path.""
 
 from __future__ import annotations
 
+import os
 import warnings
 from pathlib import Path
 
@@ -181,6 +182,11 @@ def test_root_confines_every_file_read(tmp_path):
     f = write(inside, "arm.urdf", arm_urdf("package://p/meshes"))
     with pytest.warns(UserWarning, match="outside the root folder: not tried"):
         from_urdf(f, search=[outside], root=inside)
+    write_meshes(inside / "copy")
+    os.unlink(inside / "copy" / "meshes" / "arm.stl")
+    os.link(outside / "meshes" / "arm.stl", inside / "copy" / "meshes" / "arm.stl")
+    with pytest.warns(UserWarning, match="2 hard links, which may lead outside the root"):
+        from_urdf(f, search=[inside / "copy"], root=inside)
     assert quiet(f, search=[outside]).geometry  # without a root it is found
 
 

@@ -11,6 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from workcell.cell import Workcell, compile_cell
+from workcell.errors import ModelError
 from workcell.examples import thesis_handoff, thesis_pick_place
 from workcell.sim.contacts import DEFAULT_TOLERANCE, contact_model
 from workcell.spatial import rot_z, translation
@@ -131,3 +132,39 @@ def test_robot_choice_rebuilds_through_add_robot():
     for name in got:
         np.testing.assert_array_equal(got[name], want[name])
     assert any(got[n].shape != old[n].shape or not np.allclose(got[n], old[n]) for n in got)
+
+
+ONE_JOINT_URDF = """<?xml version="1.0"?>
+<robot name="one">
+  <link name="base"><visual><geometry><box size="0.1 0.1 0.1"/></geometry></visual></link>
+  <link name="arm"><visual><geometry><box size="0.3 0.05 0.05"/></geometry></visual></link>
+  <joint name="j1" type="revolute">
+    <parent link="base"/><child link="arm"/><origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>
+    <limit lower="-2" upper="2" velocity="1.5" effort="10"/>
+  </joint>
+</robot>
+"""
+
+
+def test_a_variant_saves_its_robots_as_the_cell_did(tmp_path):
+    """Library robots stay library names (with their gripper parameters) and file robots
+    stay their files; only what the variant changes differs."""
+    from workcell.robots import from_urdf
+
+    (tmp_path / "one.urdf").write_text(ONE_JOINT_URDF)
+    cell = thesis_handoff.build()
+    cell.add_robot("one", from_urdf(tmp_path / "one.urdf"), base=translation(2, 0, 0), q=[0.5])
+    B = translation(0.1, 0.2, 0.0) @ rot_z(0.3)
+    variant = rebuild(cell, bases={"puma_1": B})
+    before, after = cell.to_dict(tmp_path), variant.to_dict(tmp_path)
+    for old, new in zip(before["robots"], after["robots"], strict=True):
+        if new["name"] == "puma_1":
+            assert new.pop("base") == B.tolist()
+            old.pop("base")
+        assert new == old
+    assert after["robots"][0]["builtin"] == "puma260"
+    assert after["robots"][0]["gripper"] is not None
+    assert after["robots"][2]["file"]["path"] == "one.urdf"
+    assert variant.robots["puma_2"].robot is cell.robots["puma_2"].robot  # not rebuilt
+    with pytest.raises(ModelError, match="keeps its gripper"):
+        Workcell("w").add_robot("p", cell.robots["puma_1"], gripper=True)

@@ -9,7 +9,10 @@ A cell's robot entry holds exactly one of (:meth:`workcell.Workcell.to_dict`):
   (:func:`workcell.robots.from_urdf`, :func:`workcell.robots.from_mjcf`; folders in
   ``packages`` and ``search`` relative like the path). Loading re-imports the file; a
   robot file that is missing or whose bytes changed since the cell was saved is a
-  ModelError, so a cell never silently runs another robot;
+  ModelError, so a cell never silently runs another robot. A server's ``cell_data``
+  reply adds ``"kinematics"`` (:func:`kinematics_json`) beside ``"file"``: a client on
+  another machine, without the file, rebuilds the robot from it (with a warning), without
+  link geometry;
 - ``"chain"``: any other robot, inline: its joints (each by its DH row when it was built
   from one, else by origin, axis and axis point), limits, speeds, accelerations and jerks
   (null: none), base, tool, named poses, nominal speed, source, and its link solids (the
@@ -25,6 +28,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -38,7 +42,7 @@ from workcell.robots.chain import Joint
 from workcell.robots.meshfile import sha256
 from workcell.robots.robot import LinkGeometry, Robot
 
-__all__ = ["robot_from_json", "robot_json"]
+__all__ = ["kinematics_json", "robot_from_json", "robot_json"]
 
 _LIMITS = ("max_speed", "max_acceleration", "max_jerk")
 
@@ -119,7 +123,24 @@ def robot_json(robot: Robot, base_dir: Path | None = None) -> dict[str, Any]:
             "import it with from_urdf or from_mjcf (the cell saves the file), or give it "
             "modeller solids"
         )
-    chain = {
+    chain = kinematics_json(robot)
+    chain["model"] = None if robot.model is None else robot.model.to_dict()
+    chain["geometry"] = [
+        {
+            "link": g.link,
+            "block": g.block,
+            "transform": g.transform.tolist(),
+            "colour": None if g.colour is None else list(g.colour),
+        }
+        for g in robot.geometry
+    ]
+    return {"chain": chain}
+
+
+def kinematics_json(robot: Robot) -> dict[str, Any]:
+    """A ``"chain"`` entry of ``robot`` without its link geometry and gripper: joints,
+    limits, base, tool, named poses, nominal speed, source (module doc)."""
+    return {
         "name": robot.name,
         "source": robot.source,
         "nominal_speed": robot.nominal_speed,
@@ -127,18 +148,7 @@ def robot_json(robot: Robot, base_dir: Path | None = None) -> dict[str, Any]:
         "tool": robot.tool.tolist(),
         "poses": {k: v.tolist() for k, v in robot.poses.items()},
         "joints": [_joint_json(j) for j in robot.joints],
-        "model": None if robot.model is None else robot.model.to_dict(),
-        "geometry": [
-            {
-                "link": g.link,
-                "block": g.block,
-                "transform": g.transform.tolist(),
-                "colour": None if g.colour is None else list(g.colour),
-            }
-            for g in robot.geometry
-        ],
     }
-    return {"chain": chain}
 
 
 def _file_robot(f: Mapping[str, Any], base_dir: Path | None, root: Path | None) -> Robot:
@@ -190,8 +200,22 @@ def robot_from_json(
     files a file robot reads. ModelError (or KeyError/TypeError/ValueError for malformed
     data, which the cell loader reports with the entry's place)."""
     if "file" in entry:
-        return _file_robot(entry["file"], base_dir, root)
-    c = entry["chain"]
+        try:
+            return _file_robot(entry["file"], base_dir, root)
+        except ModelError as exc:
+            if "kinematics" not in entry:
+                raise
+            warnings.warn(
+                f"{exc}; robot '{entry['kinematics'].get('name')}' is rebuilt from the "
+                "kinematics sent with it (joints, limits, base, tool, poses), without its "
+                "link geometry and its file's gripper",
+                stacklevel=2,
+            )
+            return _chain_robot(entry["kinematics"])
+    return _chain_robot(entry["chain"])
+
+
+def _chain_robot(c: Mapping[str, Any]) -> Robot:
     model = None if c.get("model") is None else Model.from_dict(c["model"])
     geometry = tuple(
         LinkGeometry(

@@ -19,34 +19,46 @@ Names are unique across all four kinds and MJCF-safe: a letter or '_' followed b
 letters, digits, '_' or '-' (no '.', which separates robot prefixes in the compiled
 model, and no '/', which dm_control reserves). A failed ``add_*`` changes nothing.
 
-Saved as versioned JSON (``format: "workcell-cell", version: 1``); the model through
-:meth:`Model.to_dict`, robots as their built-in name, their robot file (path relative
-to the cell file, sha256, import options) or their chain inline
-(:mod:`workcell.cell.robot_json`), plus gripper parameters.
+Saved as versioned JSON (:mod:`workcell.cell.cell_json`): the model, the parts, robots
+(as their built-in name, their robot file or their chain inline,
+:mod:`workcell.cell.robot_json`) and cameras. The records a cell holds (parts, robot
+placements, cameras), its name rule and default colours are in
+:mod:`workcell.cell.items` and importable from here too.
 """
 
 from __future__ import annotations
 
-import functools
 import json
 import os
-import re
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Mapping
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from workcell import limits
-from workcell.cell.robot_json import robot_from_json, robot_json
+from workcell.cell.cell_json import FORMAT, VERSION, cell_from_dict, cell_to_dict
+from workcell.cell.items import (
+    BUILTIN_ROBOTS,
+    GRIPPER_PARAMETERS,
+    MOVABLE_COLOURS,
+    STATIC_COLOURS,
+    Array,
+    Camera,
+    MovablePart,
+    RobotPlacement,
+    StaticPart,
+    build_robot,
+    check_cell_name,
+)
+from workcell.cell.items import look_at as look_at  # importable from here as before
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError, ModelError, WorkcellError
 from workcell.files import atomic_write_text, load_json
-from workcell.modeller.model import MAX_NAME_LENGTH, Model, check_colour
-from workcell.robots import attach_gripper, get, library, parallel_gripper
+from workcell.modeller.model import Model, check_colour
+from workcell.robots import attach_gripper, parallel_gripper
 from workcell.robots.robot import Robot
 from workcell.spatial import as_transform, translation
 
@@ -65,139 +77,7 @@ __all__ = [
     "check_cell_name",
 ]
 
-FORMAT = "workcell-cell"
-VERSION = 1
-# the default colours (RGBA), by kind, one after another per part: muted tones for what
-# stands still, vivid ones for what robots carry, none close to the robots' pale arms,
-# dark bases and orange fingers, nor to the blue-grey floor of the pictures
-STATIC_COLOURS = (
-    (0.55, 0.45, 0.35, 1.0),  # wood
-    (0.36, 0.50, 0.72, 1.0),  # slate blue
-    (0.42, 0.62, 0.45, 1.0),  # sage
-    (0.72, 0.64, 0.46, 1.0),  # sand
-    (0.56, 0.42, 0.58, 1.0),  # mauve
-    (0.40, 0.62, 0.64, 1.0),  # teal
-)
-MOVABLE_COLOURS = (
-    (0.86, 0.18, 0.14, 1.0),  # red
-    (0.15, 0.62, 0.25, 1.0),  # green
-    (0.96, 0.78, 0.10, 1.0),  # yellow
-    (0.14, 0.42, 0.92, 1.0),  # blue
-    (0.82, 0.22, 0.72, 1.0),  # magenta
-    (0.10, 0.78, 0.82, 1.0),  # cyan
-)
-BUILTIN_ROBOTS: Mapping[str, Callable[[], Robot]] = MappingProxyType(
-    {name: functools.partial(get, name) for name in library()}
-)
-"""The library robots by name (:func:`workcell.robots.get`), as the cell builds them."""
-GRIPPER_PARAMETERS = (
-    "name",
-    "max_opening",
-    "finger_length",
-    "finger_width",
-    "finger_thickness",
-    "palm_height",
-    "tcp_depth",
-)
-_NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_\-]*")
 _ENTITY_LEVELS = ("block", "object")
-
-Array = NDArray[np.float64]
-
-
-def check_cell_name(name: object, kind: str = "item") -> str:
-    """Return ``name`` if it is a valid (MJCF-safe) cell name, else raise ModelError."""
-    if not isinstance(name, str) or len(name) > MAX_NAME_LENGTH or not _NAME_RE.fullmatch(name):
-        shown = repr(name) if len(repr(name)) <= 60 else repr(name)[:57] + "..."
-        raise ModelError(
-            f"invalid {kind} name {shown}: use a letter or '_' followed by letters, digits, "
-            f"'_' or '-' (no '.', no '/'), at most {MAX_NAME_LENGTH} characters"
-        )
-    return name
-
-
-@dataclass(frozen=True, eq=False)
-class StaticPart:
-    """A fixed part: ``entity`` (level, name) of the cell's model at world ``pose`` (4x4)."""
-
-    name: str
-    entity: tuple[str, str]
-    pose: Array
-    colour: tuple[float, ...]
-
-
-@dataclass(frozen=True, eq=False)
-class MovablePart:
-    """A movable part (free body when compiled): as :class:`StaticPart` plus ``density`` (kg/m^3)."""
-
-    name: str
-    entity: tuple[str, str]
-    pose: Array
-    colour: tuple[float, ...]
-    density: float
-
-
-@dataclass(frozen=True, eq=False)
-class RobotPlacement:
-    """A robot in the cell.
-
-    ``robot`` as built (gripper attached if any); ``base`` (4x4) the world pose of the
-    robot's base frame, so the world pose of its tool is ``base @ robot.fk(q)``; ``q``
-    the initial joint values (rad/m). ``builtin`` names the library robot it came from
-    ("ur5e", "puma260", ...; None for a custom robot), ``gripper_parameters`` the
-    :func:`parallel_gripper` arguments the cell attached (None: no gripper, or the
-    robot's own) and ``bare`` the Robot as given before that (None: ``robot``).
-    """
-
-    name: str
-    robot: Robot
-    base: Array
-    q: Array
-    builtin: str | None = None
-    gripper_parameters: Mapping[str, Any] | None = field(default=None)
-    bare: Robot | None = None
-
-    @property
-    def world_base(self) -> Array:
-        """World pose of the robot's link 0 body: ``base @ robot.base``."""
-        return self.base @ self.robot.base
-
-    def tool_pose(self, q: ArrayLike | None = None) -> Array:
-        """World pose of the tool at ``q`` (default: the initial q)."""
-        return self.base @ self.robot.fk(self.q if q is None else q)
-
-
-@dataclass(frozen=True, eq=False)
-class Camera:
-    """A named camera at ``position`` looking at ``target`` (m) with vertical field ``fovy`` (deg)."""
-
-    name: str
-    position: Array
-    target: Array
-    fovy: float
-
-    def pose(self) -> Array:
-        """World pose of the camera frame (MuJoCo convention: looks along -z, y up)."""
-        return look_at(self.position, self.target)
-
-
-def look_at(position: ArrayLike, target: ArrayLike) -> Array:
-    """Camera frame at ``position`` whose -z axis points to ``target``; x horizontal.
-
-    When the view is vertical the world y axis serves as the up hint instead of z.
-    """
-    p = np.asarray(position, dtype=np.float64)
-    z = p - np.asarray(target, dtype=np.float64)
-    z = z / np.linalg.norm(z)
-    up = np.array([0.0, 0.0, 1.0])
-    if abs(z @ up) > 1 - 1e-9:
-        up = np.array([0.0, 1.0, 0.0])
-    x = np.cross(up, z)
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    T = np.eye(4)
-    T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, y, z, p
-    return T
 
 
 def _vec3(value: object, what: str) -> Array:
@@ -207,23 +87,6 @@ def _vec3(value: object, what: str) -> Array:
     v = np.array(values, dtype=np.float64)
     limits.check("max_coordinate", float(np.abs(v).max()), what)
     return v
-
-
-def build_robot(builtin: str, gripper: Mapping[str, Any] | None) -> Robot:
-    """The library robot ``builtin`` with a parallel gripper of ``gripper`` parameters (or none)."""
-    if builtin not in BUILTIN_ROBOTS:
-        raise ModelError(f"unknown built-in robot {builtin!r}; known: {', '.join(BUILTIN_ROBOTS)}")
-    robot = get(builtin)
-    if gripper is None:
-        return robot
-    if not isinstance(gripper, Mapping):
-        raise ModelError(f"gripper parameters must be a mapping, got {gripper!r}")
-    bad = sorted(set(gripper) - set(GRIPPER_PARAMETERS))
-    if bad:
-        raise ModelError(
-            f"unknown gripper parameter(s) {bad}; valid: {', '.join(GRIPPER_PARAMETERS)}"
-        )
-    return attach_gripper(robot, parallel_gripper(**gripper))
 
 
 class Workcell:
@@ -378,14 +241,16 @@ class Workcell:
     def add_robot(
         self,
         name: str,
-        robot: str | Robot = "puma260",
+        robot: str | Robot | RobotPlacement = "puma260",
         *,
         gripper: Mapping[str, Any] | bool | None = None,
         base: ArrayLike | None = None,
         q: ArrayLike | None = None,
     ) -> RobotPlacement:
         """Add a robot: a library name (``workcell.robots.library()``: "ur5e", "puma260",
-        "kuka_kr6_r700", ...) or a :class:`Robot`.
+        "kuka_kr6_r700", ...), a :class:`Robot`, or the :class:`RobotPlacement` of another
+        cell (its robot as placed, saved as it was: library name, gripper, file; ``base``
+        and ``q`` default to the placement's; ``gripper`` must be None).
 
         ``gripper``: True for the default :func:`parallel_gripper`, a mapping of its
         parameters, or None for none (a ``Robot`` may already carry one). ``base`` (4x4
@@ -407,8 +272,17 @@ class Workcell:
             raise ModelError(
                 f"{what}: gripper must be True, None or a mapping of parallel_gripper parameters"
             )
+        bare: Robot | None = None
+        if isinstance(robot, RobotPlacement):
+            if params is not None:
+                raise ModelError(f"{what}: a placed robot keeps its gripper; give gripper=None")
+            base = robot.base if base is None else base
+            q = robot.q if q is None else q
+            params, bare = robot.gripper_parameters, robot.bare
         try:
-            if isinstance(robot, str):
+            if isinstance(robot, RobotPlacement):
+                builtin, r = robot.builtin, robot.robot
+            elif isinstance(robot, str):
                 builtin: str | None = robot
                 r = build_robot(robot, params)
             elif isinstance(robot, Robot):
@@ -430,7 +304,8 @@ class Workcell:
             qv = r.check_limits(q0).copy()
         except WorkcellError as exc:
             raise ModelError(f"{what}: initial q: {exc}") from exc
-        bare = robot if isinstance(robot, Robot) and r is not robot else None
+        if isinstance(robot, Robot) and r is not robot:
+            bare = robot
         placed = RobotPlacement(name, r, B, qv, builtin, params, bare)
         self._robots[name] = placed
         return placed
@@ -486,59 +361,15 @@ class Workcell:
         return translation(*self.model.properties(p.entity).centroid)
 
     # ------------------------------------------------------------------ storage
-    def to_dict(self, base_dir: str | os.PathLike | None = None) -> dict:
+    def to_dict(
+        self, base_dir: str | os.PathLike | None = None, *, kinematics: bool = False
+    ) -> dict:
         """The cell as JSON-able data. A robot is its library name, its robot file
         (path relative to ``base_dir`` when given, else absolute) or its chain inline
-        (:mod:`workcell.cell.robot_json`); ModelError for one that cannot be saved."""
-        robots = []
-        folder = None if base_dir is None else Path(os.path.abspath(base_dir))
-        for r in self._robots.values():
-            entry: dict[str, Any] = {"name": r.name}
-            if r.builtin is not None:
-                entry["builtin"] = r.builtin
-            else:
-                try:
-                    entry.update(robot_json(r.bare or r.robot, folder))
-                except ModelError as exc:
-                    raise ModelError(f"robot '{r.name}' cannot be saved: {exc}") from exc
-            entry["gripper"] = None if r.gripper_parameters is None else dict(r.gripper_parameters)
-            entry["base"], entry["q"] = r.base.tolist(), r.q.tolist()
-            robots.append(entry)
-        return {
-            "format": FORMAT,
-            "version": VERSION,
-            "name": self.name,
-            "model": self.model.to_dict(),
-            "static": [
-                {
-                    "name": p.name,
-                    "entity": list(p.entity),
-                    "pose": p.pose.tolist(),
-                    "colour": list(p.colour),
-                }
-                for p in self._static.values()
-            ],
-            "movable": [
-                {
-                    "name": p.name,
-                    "entity": list(p.entity),
-                    "pose": p.pose.tolist(),
-                    "colour": list(p.colour),
-                    "density": p.density,
-                }
-                for p in self._movable.values()
-            ],
-            "robots": robots,
-            "cameras": [
-                {
-                    "name": c.name,
-                    "position": c.position.tolist(),
-                    "target": c.target.tolist(),
-                    "fovy": c.fovy,
-                }
-                for c in self._cameras.values()
-            ],
-        }
+        (:mod:`workcell.cell.robot_json`); ModelError for one that cannot be saved.
+        ``kinematics``: a robot file's entry also carries the robot's kinematics, for a
+        reader without the file (what a server sends its clients)."""
+        return cell_to_dict(self, base_dir, kinematics=kinematics)
 
     @classmethod
     def from_dict(
@@ -554,88 +385,7 @@ class Workcell:
         Robot file paths are relative to ``base_dir`` (absolute when None); with ``root``
         (a server's folder) no robot file outside it is read.
         """
-        folder = None if base_dir is None else Path(os.path.abspath(base_dir))
-
-        def fail(where: str, exc: BaseException | str) -> ModelError:
-            return ModelError(f"{source}: {where}: {exc}")
-
-        if not isinstance(data, dict):
-            raise fail("top level", "expected a JSON object")
-        if data.get("format") != FORMAT:
-            # never quote the field: the file may be anything (a server reads files by name)
-            hint = (
-                " (a model file: load it as a model)"
-                if data.get("format") == "workcell-model"
-                else ""
-            )
-            raise fail("format", f"not a {FORMAT} document (missing or wrong 'format'){hint}")
-        version = data.get("version")
-        if type(version) is not int or version != VERSION:
-            small = isinstance(version, (int, float)) and abs(version) < 10**9
-            shown = repr(version) if version is None or small else f"(a {type(version).__name__})"
-            raise fail("version", f"supported: {VERSION}, got {shown}")
-        try:
-            model = Model.from_dict(data["model"])
-        except (WorkcellError, KeyError, TypeError, ValueError, OverflowError) as exc:
-            raise fail("model", exc) from exc
-        try:
-            cell = cls(data.get("name", "workcell"), model)
-        except WorkcellError as exc:
-            raise fail("name", exc) from exc
-        sections: list[tuple[str, Callable[[dict], object]]] = [
-            (
-                "static",
-                lambda e: cell.add_static(
-                    e["name"], tuple(e["entity"]), e["pose"], colour=e["colour"]
-                ),
-            ),
-            (
-                "movable",
-                lambda e: cell.add_movable(
-                    e["name"],
-                    tuple(e["entity"]),
-                    e["pose"],
-                    density=e["density"],
-                    colour=e["colour"],
-                ),
-            ),
-            (
-                "robots",
-                lambda e: cell.add_robot(
-                    e["name"],
-                    e["builtin"] if "builtin" in e else robot_from_json(e, folder, root),
-                    gripper=e.get("gripper"),
-                    base=e["base"],
-                    q=e["q"],
-                ),
-            ),
-            (
-                "cameras",
-                lambda e: cell.add_camera(e["name"], e["position"], e["target"], e["fovy"]),
-            ),
-        ]
-        for key, add in sections:
-            entries = data.get(key, [])
-            if not isinstance(entries, list):
-                raise fail(key, "expected a list")
-            for i, e in enumerate(entries):
-                where = f"{key}[{i}]"
-                name = e.get("name") if isinstance(e, dict) else None
-                if (
-                    isinstance(name, str)
-                    and len(name) <= MAX_NAME_LENGTH
-                    and _NAME_RE.fullmatch(name)
-                ):
-                    where += f" ('{name}')"
-                try:
-                    if not isinstance(e, dict):
-                        raise ModelError("expected a JSON object")
-                    add(e)
-                except KeyError as exc:
-                    raise fail(where, f"missing field {exc}") from exc
-                except (WorkcellError, TypeError, ValueError, OverflowError) as exc:
-                    raise fail(where, exc) from exc
-        return cell
+        return cell_from_dict(cls, data, source=source, base_dir=base_dir, root=root)
 
     def save(self, path: str | os.PathLike) -> None:
         """Write the cell as versioned JSON, atomically; a failed write raises ModelError.

@@ -10,7 +10,8 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 if TYPE_CHECKING:
-    from workcell.modeller.model import Model, _Entity
+    from workcell.modeller.entities import _Entity
+    from workcell.modeller.model import Model
 
 __all__ = ["describe_transform", "show_entity", "show_model"]
 

@@ -28,7 +28,8 @@ import numpy as np
 
 from workcell.errors import ModelError, WorkcellError
 from workcell.files import atomic_write_text, load_json
-from workcell.modeller.model import BOOLEAN_OPS, CHILD, LEVELS, Model, check_name
+from workcell.modeller.entities import BOOLEAN_OPS, CHILD, LEVELS, check_name
+from workcell.modeller.model import Model
 from workcell.modeller.surface import Surface
 
 __all__ = [

@@ -5,7 +5,8 @@ the surface's local xy-plane (metres). Its front side faces local +z. Surfaces a
 validated when created and immutable afterwards: every contour is closed (the last point
 joins the first), simple (no self-intersection), of non-zero area; holes lie strictly
 inside the main contour and do not touch or overlap each other. Orientation is
-normalised: the main contour counter-clockwise, holes clockwise (seen from +z).
+normalised: the main contour counter-clockwise, holes clockwise (seen from +z). The
+contour checks are in :mod:`~workcell.modeller.contours`.
 """
 
 from __future__ import annotations
@@ -15,98 +16,22 @@ from dataclasses import dataclass, field
 
 import mapbox_earcut
 import numpy as np
-import shapely
 from numpy.typing import ArrayLike, NDArray
-from shapely.geometry import LinearRing, Polygon
 
-from workcell import limits
 from workcell.checks import is_finite_number
 from workcell.errors import GeometryError
+from workcell.modeller.contours import (
+    EPS,
+    check_holes,
+    check_simple,
+    clean_contour,
+    convex_mask,
+    next_points,
+    ngon,
+    signed_area,
+)
 
 __all__ = ["Surface"]
-
-_EPS = 1e-12
-
-
-def _next(p: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The array shifted by one along axis 0 (element i is p[i + 1], cyclically); cheap roll."""
-    return np.concatenate([p[1:], p[:1]])
-
-
-def _signed_area(p: NDArray[np.float64]) -> float:
-    """Signed area (m^2) of a closed polygon, thesis formula 1/2 sum(x_i y_i+1 - x_i+1 y_i)."""
-    x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, _next(y)) - np.dot(_next(x), y))
-
-
-def _clean_contour(points: ArrayLike, label: str, surface: str) -> NDArray[np.float64]:
-    """Return an (N, 2) float array with the closing point and repeated points removed."""
-    try:
-        kind = np.asarray(points).dtype.kind
-        p = np.array(points, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise GeometryError(f"surface '{surface}': {label} is not a list of (x, y) points") from exc
-    if kind not in "iuf":
-        raise GeometryError(
-            f"surface '{surface}': {label} must hold numbers (not strings or bools)"
-        )
-    if p.ndim != 2 or p.shape[1] != 2:
-        raise GeometryError(
-            f"surface '{surface}': {label} must be a list of (x, y) points, got shape {p.shape}"
-        )
-    if not np.all(np.isfinite(p)):
-        raise GeometryError(f"surface '{surface}': {label} has a non-finite coordinate")
-    if len(p):
-        limits.check("max_coordinate", float(np.abs(p).max()), f"surface '{surface}': {label}")
-    limits.check("max_facets", len(p), f"surface '{surface}': {label} (points)")
-    keep = np.ones(len(p), dtype=bool)
-    if len(p) > 1:
-        keep[1:] = np.any(np.abs(np.diff(p, axis=0)) > _EPS, axis=1)
-    p = p[keep]
-    # the closing point only after dropping repeats: (..., a, a) closed twice is still closed
-    if len(p) > 1 and np.abs(p[0] - p[-1]).max() <= _EPS:
-        p = p[:-1]
-    if len(p) < 3:
-        raise GeometryError(
-            f"surface '{surface}': {label} is not closed: it needs at least 3 distinct points, "
-            f"got {len(p)}"
-        )
-    return p
-
-
-def _convex_mask(P: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """For a stack of contours (K, N, 2): which are strictly convex (so simple), either winding.
-
-    Every turn has the same sign, none doubles back (a turn of ~pi), and the turns add up
-    to one loop, not two (a pentagram's all-left turns add up to 4 pi).
-    """
-    e = np.roll(P, -1, axis=1) - P
-    en = np.roll(e, -1, axis=1)
-    turn = e[..., 0] * en[..., 1] - e[..., 1] * en[..., 0]
-    same = (turn > 0).all(axis=1) | (turn < 0).all(axis=1)
-    angle = np.abs(np.arctan2(turn, e[..., 0] * en[..., 0] + e[..., 1] * en[..., 1]))
-    return (
-        same & (angle.max(axis=1) < np.pi - 1e-9) & (np.abs(angle.sum(axis=1) - 2 * np.pi) < 1e-6)
-    )
-
-
-def _strictly_convex(p: NDArray[np.float64]) -> bool:
-    """True when the contour (N, 2) is strictly convex (see :func:`_convex_mask`)."""
-    return bool(_convex_mask(p[None])[0])
-
-
-def _check_simple(p: NDArray[np.float64], label: str, surface: str) -> bool:
-    """Refuse a zero-area or self-intersecting contour; return whether it is strictly convex."""
-    if abs(_signed_area(p)) <= _EPS * max(1.0, float(np.ptp(p, axis=0).max()) ** 2):
-        # zero signed area: collinear (or tiny) points, or lobes that cancel (a bow-tie)
-        sv = np.linalg.svd(p - p.mean(axis=0), compute_uv=False)
-        if sv[-1] <= 1e-9 * sv[0] or LinearRing(p).is_simple:
-            raise GeometryError(f"surface '{surface}': {label} has zero area")
-    convex = _strictly_convex(p)
-    if not convex and not LinearRing(p).is_simple:
-        reason = shapely.is_valid_reason(Polygon(p))
-        raise GeometryError(f"surface '{surface}': {label} is not simple ({reason})")
-    return convex
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,19 +50,19 @@ class Surface:
     def __init__(
         self, main: ArrayLike, holes: Sequence[ArrayLike] = (), *, name: str = "surface"
     ) -> None:
-        m = _clean_contour(main, "main contour", name)
-        convex = _check_simple(m, "main contour", name)
-        if _signed_area(m) < 0:
+        m = clean_contour(main, "main contour", name)
+        convex = check_simple(m, "main contour", name)
+        if signed_area(m) < 0:
             m = m[::-1].copy()
         hs = []
         for i, h in enumerate(holes):
             label = f"hole {i}"
-            hp = _clean_contour(h, label, name)
-            _check_simple(hp, label, name)
-            if _signed_area(hp) > 0:
+            hp = clean_contour(h, label, name)
+            check_simple(hp, label, name)
+            if signed_area(hp) > 0:
                 hp = hp[::-1].copy()
             hs.append(hp)
-        _check_holes(m, hs, name)
+        check_holes(m, hs, name)
         for a in (m, *hs):
             a.flags.writeable = False
         object.__setattr__(self, "main", m)
@@ -171,7 +96,7 @@ class Surface:
         name: str = "polygon",
     ) -> Surface:
         """Regular ``n``-gon with vertices on the circle of ``radius`` (m); first at ``phase`` (rad)."""
-        return cls(_ngon(n, radius, center, phase, name), name=name)
+        return cls(ngon(n, radius, center, phase, name), name=name)
 
     @classmethod
     def circle(
@@ -206,12 +131,12 @@ class Surface:
                 f"convex_many needs (K, N >= 3, 2) contours and K names, got {P.shape}"
             )
         step = np.abs(np.roll(P, -1, axis=1) - P).max(axis=2)
-        ok = np.isfinite(P).all(axis=(1, 2)) & (step > _EPS).all(axis=1) & _convex_mask(P)
+        ok = np.isfinite(P).all(axis=(1, 2)) & (step > EPS).all(axis=1) & convex_mask(P)
         area = 0.5 * (
             P[..., 0] * np.roll(P[..., 1], -1, axis=1) - np.roll(P[..., 0], -1, axis=1) * P[..., 1]
         ).sum(axis=1)
         scale = np.maximum(1.0, np.ptp(P, axis=1).max(axis=1))
-        ok &= np.abs(area) > _EPS * scale**2
+        ok &= np.abs(area) > EPS * scale**2
         out = []
         for k, name in enumerate(names):
             if not ok[k]:
@@ -240,12 +165,12 @@ class Surface:
     @property
     def area(self) -> float:
         """Area (m^2): main contour minus holes, by the thesis's edge formula."""
-        return _signed_area(self.main) + sum(_signed_area(h) for h in self.holes)
+        return signed_area(self.main) + sum(signed_area(h) for h in self.holes)
 
     @property
     def perimeter(self) -> float:
         """Total length (m) of all contours."""
-        return float(sum(np.linalg.norm(_next(c) - c, axis=1).sum() for c in self.contours))
+        return float(sum(np.linalg.norm(next_points(c) - c, axis=1).sum() for c in self.contours))
 
     @property
     def n_edges(self) -> int:
@@ -259,7 +184,7 @@ class Surface:
         the left of every edge.
         """
         starts = np.concatenate(self.contours)
-        ends = np.concatenate([_next(c) for c in self.contours])
+        ends = np.concatenate([next_points(c) for c in self.contours])
         return starts, ends
 
     def triangulate(self) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
@@ -302,7 +227,7 @@ class Surface:
             raise GeometryError(f"a 2-D affine map is (2, 3) or (3, 3), got shape {a.shape}")
         if not np.isfinite(a).all() or (a.shape == (3, 3) and not np.array_equal(a[2], [0, 0, 1])):
             raise GeometryError("a 2-D affine map must be finite with last row (0, 0, 1)")
-        if abs(np.linalg.det(a[:2, :2])) < _EPS:
+        if abs(np.linalg.det(a[:2, :2])) < EPS:
             raise GeometryError("the 2-D affine map is singular")
 
         def f(p: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -333,20 +258,6 @@ class Surface:
             f"Surface(name={self.name!r}, main={len(self.main)} points, "
             f"holes={len(self.holes)}, area={self.area:.6g} m^2)"
         )
-
-
-def _ngon(
-    n: int, radius: float, center: tuple[float, float], phase: float, name: str
-) -> NDArray[np.float64]:
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
-        raise GeometryError(f"surface '{name}': a polygon needs an integer n >= 3 sides, got {n!r}")
-    if not (is_finite_number(radius) and radius > 0):
-        raise GeometryError(f"surface '{name}': radius must be a number > 0, got {radius!r}")
-    if not (is_finite_number(phase) and len(center) == 2 and all(map(is_finite_number, center))):
-        raise GeometryError(f"surface '{name}': center must be two numbers and phase a number")
-    limits.check("max_facets", int(n), f"surface '{name}' (n = {n})")
-    t = phase + 2 * np.pi * np.arange(int(n)) / int(n)
-    return np.column_stack([center[0] + radius * np.cos(t), center[1] + radius * np.sin(t)])
 
 
 def _conforming(
@@ -395,24 +306,3 @@ def _conforming(
         else:
             out.append(f)
     return np.array(out, dtype=np.int64).reshape(-1, 3)
-
-
-def _check_holes(main: NDArray[np.float64], holes: list[NDArray[np.float64]], name: str) -> None:
-    if not holes:
-        return
-    outer = Polygon(main)
-    polys = [Polygon(h) for h in holes]
-    inside = shapely.contains_properly(outer, polys)
-    for i, ok in enumerate(inside):
-        if not ok:
-            where = "crosses or touches" if outer.intersects(polys[i]) else "lies outside"
-            raise GeometryError(
-                f"surface '{name}': hole {i} {where} the main contour; holes must lie strictly inside"
-            )
-    tree = shapely.STRtree(polys)
-    pairs = tree.query(polys, predicate="intersects")
-    for i, j in pairs.T:
-        if i < j:
-            raise GeometryError(
-                f"surface '{name}': holes {i} and {j} overlap or touch; holes must be disjoint"
-            )

@@ -21,11 +21,12 @@ from scipy.spatial import cKDTree
 
 from workcell import limits
 from workcell.errors import GeometryError
+from workcell.modeller.entities import _target_counts
 from workcell.modeller.meshprops import MassProperties, mass_properties, orient_consistently
 from workcell.spatial import det3
 
 if TYPE_CHECKING:
-    from workcell.modeller.model import _Entity
+    from workcell.modeller.entities import _Entity
 
 __all__ = ["WorldPart", "facet_estimate", "merge_vertices", "place_mesh"]
 
@@ -278,13 +279,7 @@ def facet_estimate(e: _Entity) -> int:
         if e.level == "surface":
             hit = e.surface.n_edges - 2 + 2 * len(e.surface.holes)
         else:
-            counts: dict[int, int] = {}
-            hit = 0
-            for t in e.rels.targets:
-                k = counts.get(id(t))
-                if k is None:
-                    k = counts[id(t)] = facet_estimate(t)
-                hit += k
+            hit = sum(facet_estimate(t) * n for t, n in _target_counts(e).items())
         e.cache["facets"] = hit
     return hit
 

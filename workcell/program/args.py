@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from workcell.checks import is_finite_number
+from workcell.checks import shown as _show
 from workcell.errors import ProgramError
 
 __all__ = [
@@ -54,11 +55,6 @@ def arg(convert: Converter, default: Any = _MISSING, doc: str = "") -> Any:
     if default is _MISSING:
         return field(metadata=meta)
     return field(default=default, metadata=meta)
-
-
-def _show(v: object) -> str:
-    s = repr(v)
-    return s if len(s) <= 60 else s[:57] + "..."
 
 
 def _is_number(v: object) -> bool:

@@ -268,10 +268,11 @@ class RemoveFromCell(Command, wire="remove_from_cell"):
 
 @dataclass(frozen=True)
 class CellData(Command, wire="cell_data"):
-    """The cell as its versioned JSON data (what ``cell save`` writes)."""
+    """The cell as its versioned JSON data (what ``cell save`` writes); a robot read from
+    a file also carries its kinematics, for a client without the file."""
 
     def execute(self, session: Session) -> dict:
-        return session.require_cell().to_dict()
+        return session.require_cell().to_dict(kinematics=True)
 
 
 @dataclass(frozen=True)

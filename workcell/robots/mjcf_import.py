@@ -42,7 +42,7 @@ import trimesh
 
 from workcell import limits
 from workcell.errors import ModelError, WorkcellError
-from workcell.files import read_bytes
+from workcell.files import leaves_root, read_bytes
 from workcell.robots.chain import Joint
 from workcell.robots.meshfile import joint_speeds, parse_xml, primitive, sha256
 from workcell.robots.robot import Robot, RobotFile
@@ -71,22 +71,20 @@ def _confine(path: Path, root: Path, seen: set[Path]) -> None:
     what = f"MJCF file '{path}'"
     top, lines = parse_xml(read_bytes(path, what="MJCF file", error=ModelError), what)
     here = path.parent
-    real_root = os.path.realpath(root)
     for el in top.iter():
         for attr, value in el.attrib.items():
             if attr not in _FILE_ATTRS:
                 continue
             parts = Path(value).parts
             full = os.path.realpath(here / value)
-            if (
-                os.path.isabs(value)
-                or value.startswith("~")
-                or ".." in parts
-                or os.path.commonpath([full, real_root]) != real_root
-            ):
+            if os.path.isabs(value) or value.startswith("~") or ".." in parts:
+                why = "leads outside the root folder"
+            else:
+                why = leaves_root(full, root)
+            if why is not None:
                 raise ModelError(
-                    f"{what}: line {lines.get(el, '?')}: <{el.tag} {attr}={value!r}> leads "
-                    "outside the root folder; files must lie beside the model, inside it"
+                    f"{what}: line {lines.get(el, '?')}: <{el.tag} {attr}={value!r}> refused: "
+                    f"{why.removeprefix('it ')}; files must lie beside the model, inside the root"
                 )
             if el.tag == "include" and attr == "file" and Path(full) not in seen:
                 seen.add(Path(full))

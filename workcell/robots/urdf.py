@@ -61,7 +61,7 @@ import trimesh
 from workcell import limits
 from workcell.decompose import DEFAULT_CONCAVITY, decompose
 from workcell.errors import ModelError, WorkcellError
-from workcell.files import read_bytes
+from workcell.files import leaves_root, read_bytes
 from workcell.meshgeoms import is_convex
 from workcell.robots.chain import Joint
 from workcell.robots.meshfile import joint_speeds, load_mesh, parse_xml, primitive, sha256
@@ -149,8 +149,9 @@ class _Doc:
         self.uri, self.tried = uri, []
         for p in self.places(uri):
             real = Path(os.path.realpath(p))
-            if self.root is not None and os.path.commonpath([real, self.root]) != str(self.root):
-                self.tried.append(f"{p} (outside the root folder: not tried)")
+            why = None if self.root is None else leaves_root(real, self.root)
+            if why is not None:
+                self.tried.append(f"{p} ({why.removeprefix('it ')}: not tried)")
             elif real.is_file():
                 return real
             else:

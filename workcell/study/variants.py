@@ -93,8 +93,8 @@ def rebuild(
     for r in cell.robots.values():
         base = bases.get(r.name, r.base)
         choice = robots.get(r.name)
-        if choice is None or choice == r.builtin:
-            out.add_robot(r.name, r.robot, base=base, q=r.q)
+        if choice is None or choice == r.builtin:  # the same robot, saved as it was
+            out.add_robot(r.name, r, base=base)
             continue
         gripper: Mapping[str, object] | bool | None = None
         if r.gripper_parameters is not None:
