@@ -3,9 +3,9 @@
 the two are most likely to part: aligned and nearly aligned wrists, a stretched or folded
 elbow, the wrist centre on the l/r boundary, joints exactly at their limits.
 
-What must agree exactly: which configurations exist, which are within the limits, the
-order. The joint values agree to 1e-12 rad plus what the pose's conditioning makes of
-rounding: the two paths compute the angles apart (libm's trigonometry here, numpy's
+What must agree exactly, away from singular poses: which configurations exist, which are
+within the limits, the order. The joint values agree to 1e-12 rad plus what the pose's
+conditioning makes of rounding: the two paths compute the angles apart (libm's trigonometry here, numpy's
 vectorised one there, ~1 ulp apart), and q4, q6 move by ~1e-16 / |sin theta5| near an
 aligned wrist; at a singular pose (flagged) q itself is ill-conditioned, so there both
 answers are held to the target by the robot's own FK instead. The reported errors are
@@ -89,16 +89,24 @@ def test_single_pose_path_matches_the_batch_path_at_hard_poses(name, data):
     sols, reason = ik_report(robot, T, q_current)
     Q, valid = ik_batch(robot, T, q_current)
     present = {c for c, row in zip(CONFIGS, Q[0], strict=True) if not np.isnan(row).any()}
-    assert sorted(s.config for s in sols) == sorted(present)
+    singular = any(s.singular for s in sols)
+    if singular:
+        # the solution sets may differ here, where the two paths' rounding falls on either
+        # side of a threshold: an aligned wrist (|sin theta5| < 1e-12: one solution, or the
+        # twins) or a stretched elbow (acos turns 1e-16 of rounding into ~1e-7 rad: the u
+        # and d branches merged, or kept 1e-7 apart); every answer must reach the target
+        for c in present:
+            assert max(fk_errors(robot, Q[0, CONFIGS.index(c)], T)) < 1e-9
+    else:
+        assert sorted(s.config for s in sols) == sorted(present)
     for s in sols:
-        k = CONFIGS.index(s.config)
         dp, dr = fk_errors(robot, s.q, T)
         assert abs(s.position_error - dp) < 1e-12
         assert abs(s.orientation_error - dr) < 1e-12
-        if s.singular:  # q is ill-conditioned here: both answers reach the target
+        if singular:  # q is ill-conditioned here: the answers reach the target (above)
             assert s.success == s.within_limits
-            assert max(fk_errors(robot, Q[0, k], T)) < 1e-9
             continue
+        k = CONFIGS.index(s.config)
         assert s.within_limits == valid[0, k]
         sin5 = abs(math.sin(S.signs[4] * s.q[4] - S.offs[4]))  # |sin theta5|
         tol = np.full(6, 1e-12)
