@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from workcell.cell import Workcell, compile_cell
 from workcell.errors import ModelError
 from workcell.examples import thesis_handoff, thesis_pick_place
-from workcell.sim.contacts import DEFAULT_TOLERANCE, contact_model
+from workcell.sim.contacts import contact_model
 from workcell.spatial import rot_z, translation
 from workcell.study.variants import Template, moved, rebuild
 
@@ -53,9 +53,9 @@ def _same_as_fresh(cell, compiled, q_arm) -> None:
         m.bvh_nodeid, fresh.bvh_nodeid
     ):
         np.testing.assert_allclose(m.bvh_aabb, fresh.bvh_aabb, atol=1e-12)  # the same tree
-    # the simulator's contact model (negative margins) sees the same overlaps
+    # the simulator's contact model (margins 0) sees the same overlaps
     for model in (m, fresh):
-        sim_m = contact_model(model, DEFAULT_TOLERANCE)
+        sim_m = contact_model(model)
         c = _state(sim_m, q)[1]
         if model is m:
             first = c

@@ -85,6 +85,7 @@ __all__ = [
     "CompiledCell",
     "compile_cell",
     "export_cell",
+    "subtree_bodies",
 ]
 
 GROUND = "ground"
@@ -332,3 +333,13 @@ def export_cell(
     files = {f"{MESHDIR}/{file}": data for file, data in compiled.assets.items()}
     write_files(out_dir, {**files, name: xml.encode("utf-8")}, error=ModelError)
     return Path(out_dir) / name
+
+
+def subtree_bodies(model: mujoco.MjModel, root: int) -> list[int]:
+    """Ids of body ``root`` and every body below it, ascending (MuJoCo numbers a body
+    after its parent, so one pass in id order finds them all)."""
+    inside = {root}
+    for b in range(root + 1, model.nbody):
+        if int(model.body_parentid[b]) in inside:
+            inside.add(b)
+    return sorted(inside)

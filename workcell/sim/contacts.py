@@ -9,11 +9,16 @@ After ``mj_kinematics`` + ``mj_collision`` (MuJoCo's own narrow phase on the con
 collision pieces), :meth:`ContactMonitor.penetrations` lists the pairs of labels whose
 geoms overlap by more than ``tolerance`` (m), skipping pairs the simulator excludes
 (a held part against the gripper holding it). :func:`contact_model` gives the
-simulator's copy of the model whose geom margins are ``-tolerance / 2`` (two geoms' margins
-add up), so MuJoCo lists a contact only for an overlap deeper than the tolerance and the
-common frame, with parts merely resting on their supports, has no contact to look at. Parent/child bodies and links up to two
-apart never collide (MuJoCo's parent filter and the robot's ``<exclude>`` pairs); parts
-resting on a support touch at depth ~0, under the tolerance.
+simulator's copy of the model with every geom margin and gap 0, so MuJoCo lists each
+overlap (distance <= 0, parts resting on their supports included) with its true signed
+distance, and :meth:`ContactMonitor.penetrations` keeps the contacts deeper than the
+tolerance. (Negative margins, which would leave the shallow contacts out inside MuJoCo,
+are only valid with ``margin + gap >= 0``: with MuJoCo's convex collider, meshes and
+boxes against meshes, a touching pair overlapping by d < tolerance came back with
+``dist = -(d + tolerance)``, a false collision whenever the bounding-box tests let the
+pair through.) Parent/child bodies and links up to two apart never collide (MuJoCo's
+parent filter and the robot's ``<exclude>`` pairs); parts resting on a support touch at
+depth ~0, under the tolerance.
 
 :meth:`ContactMonitor.clearance` is the minimum signed distance between two things
 (negative: penetration depth), from ``mj_geomDistance`` over their geom pairs.
@@ -40,11 +45,18 @@ _CLEARANCE_CAP = 100.0  # m: mj_geomDistance's distmax
 Penetration = tuple[str, str, float]  # (label, label) sorted, depth (m, > 0)
 
 
-def contact_model(model: mujoco.MjModel, tolerance: float) -> mujoco.MjModel:
-    """A copy of ``model`` that reports only overlaps deeper than ``tolerance`` (m)."""
+def contact_model(model: mujoco.MjModel) -> mujoco.MjModel:
+    """A copy of ``model`` whose collisions list every overlap with its true signed
+    distance (m): geom margins and gaps 0 (module doc), and one contact per pair of convex
+    pieces (multi-point contacts off): its ``dist`` is the penetration depth found by
+    MuJoCo's EPA, the smallest translation that separates the two, as ``mj_geomDistance``
+    measures it (the extra points of multi-point contacts carry depths along an
+    approximate normal: 4.9 um deeper on a CoACD piece whose top is not quite flat).
+    The tolerance (m) a collision's depth must exceed is :attr:`ContactMonitor.tolerance`."""
     out = copy.copy(model)
-    out.geom_margin[:] = -tolerance / 2.0
+    out.geom_margin[:] = 0.0
     out.geom_gap[:] = 0.0
+    out.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_MULTICCD
     return out
 
 
@@ -112,15 +124,14 @@ class ContactMonitor:
     def penetrations(self, data: mujoco.MjData) -> list[Penetration]:
         """Label pairs overlapping by more than the tolerance in ``data``'s current contacts
         (call after mj_collision), deepest first, one entry per pair (its deepest contact)."""
-        n = data.ncon
-        if n == 0:
+        if data.ncon == 0:
             return []
         con = data.contact
-        dist = con.dist[:n]
-        hits = np.flatnonzero(dist < -self.tolerance)
-        if len(hits) == 0:
+        dist = con.dist  # (ncon,) m, signed
+        if min(dist.tolist()) >= -self.tolerance:  # touching only: the common case, fast
             return []
-        g1, g2 = con.geom1[:n], con.geom2[:n]
+        hits = np.flatnonzero(dist < -self.tolerance)
+        g1, g2 = con.geom1, con.geom2
         body = self.model.geom_bodyid
         deepest: dict[tuple[str, str], float] = {}
         for k in hits:

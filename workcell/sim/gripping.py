@@ -1,8 +1,17 @@
 """Gripper commands of the simulator (thesis §4.5): grasp tests, weld carry, handoff.
 
 :class:`GripperCommands` is a mixin of :class:`~workcell.sim.simulator.Simulator` (it uses
-the simulator's model, data, timeline and transaction; see that module's doc for the
-behaviour). A grasp is recorded as a :class:`Hold`.
+the simulator's model, data, timeline and transaction). A grasp is recorded as a
+:class:`Hold`.
+
+``close_gripper`` runs the thesis's three tests (:mod:`workcell.sim.grasp`) on every
+movable part; the first that passes is grasped: the weld equality of that gripper and
+part is activated with the captured relative pose (``eq_data``), the fingers close on the
+part, and from then on the part's free joint is written every frame as gripper pose x
+relative pose (exact carry; the timeline stores it). ``open_gripper`` releases it where
+it is. A part may be held by two robots at once (a handoff): the first holder carries it
+and may not move while the second also holds it; when the first opens, the second
+carries it.
 """
 
 from __future__ import annotations

@@ -37,13 +37,13 @@ collision events, wall time and the real-time factor. A collision is the onset (
 recorded frame) of any contact of a robot (a link or a gripper, not with the part it
 holds), or of an overlap deeper than ``contact_tolerance`` between other things (a part
 resting on a support touches at a few micrometres): in physics a robot blocked by what it
-hits barely overlaps it, and shows up as a tracking error instead.
+hits barely overlaps it, and shows up as a tracking error instead. (Grasps, releases,
+collisions and the plan's other events of a run: :mod:`workcell.sim.physics_events`.)
 """
 
 from __future__ import annotations
 
 import copy
-import heapq
 import itertools
 import math
 import sys
@@ -59,13 +59,11 @@ from workcell import limits
 from workcell.checks import is_finite_number
 from workcell.errors import ProgramError
 from workcell.sim.contacts import DEFAULT_TOLERANCE, ContactMonitor
+from workcell.sim.physics_events import PhysicsEvents
 from workcell.sim.physics_result import PhysicsResult, SettledPart, Tracking
 from workcell.sim.physics_support import (
     GripContacts,
     plan_of,
-    quat_angle,
-    relative_pose,
-    set_weld,
     weld_deviation,
 )
 from workcell.sim.timeline import Event, Timeline
@@ -78,7 +76,6 @@ __all__ = ["WELD_POSES", "PhysicsResult", "SettledPart", "Tracking", "run_physic
 WELD_POSES = ("actual", "planned")
 DEFAULT_SETTLE = 1.0  # s
 DEFAULT_CONTACT_TOLERANCE = DEFAULT_TOLERANCE  # m, as the kinematic collision check
-_REARM = 0.1  # s: a pair touching again after this long apart is a new collision
 _BLOCK = 2048  # physics steps per block of vectorised bookkeeping
 _BAD = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQPOS)
 Array = NDArray[np.float64]
@@ -135,7 +132,7 @@ def run_physics(
     return _Run(sim, timestep, float(settle), options).execute(progress)
 
 
-class _Run:
+class _Run(PhysicsEvents):
     """State of one physics run (see :func:`run_physics`)."""
 
     def __init__(
@@ -218,85 +215,6 @@ class _Run:
         self.tmax, self.tsq = np.zeros(nr), np.zeros(nr)
         self.peak = np.zeros(m.nu)
         self.carry = {p: [0.0, 0.0, False] for p in self.parts}  # max m, max rad, held
-
-    # ------------------------------------------------------------------ events
-    def _event(self, t: float, robot: str | None, kind: str, detail: str) -> None:
-        heapq.heappush(self.events, (float(t), next(self.order), Event(t, robot, kind, detail)))
-
-    def _frames(self, ts: Array, walls: Array, rows: Array, *, last: bool = False) -> None:
-        """Append frames and, in time order, the events up to their times (an event's frame
-        is the last frame at or before its time); ``last``: every event left."""
-        i, q, eps = 0, self.events, 1e-9
-        while q and (last or (len(ts) and q[0][0] <= ts[-1] + eps)):
-            t, _, e = heapq.heappop(q)
-            k = int(np.searchsorted(ts, t + eps, side="right"))
-            if k > i:
-                self.out.extend(ts[i:k], walls[i:k], rows[i:k])
-                i = k
-            self.out.add_event(e.t, e.robot, e.kind, e.detail)
-        if i < len(ts):
-            self.out.extend(ts[i:], walls[i:], rows[i:])
-
-    def _events_at(self, n: int) -> None:
-        """Apply the grasps and releases due at step ``n`` (before that step)."""
-        m, d, cc = self.m, self.d, self.cc
-        while self.next < len(self.todo) and self.todo[self.next][0] <= n:
-            g = self.todo[self.next][1]
-            self.next += 1
-            mujoco.mj_kinematics(m, d)
-            e, t = self.weld_id[(g.robot, g.part)], n * self.h
-            adr = self.free_adr[g.part]
-            if g.kind == "grasp":
-                if self.weld_pose == "actual":  # where the fingers met the part
-                    gb = m.body(cc.gripper_bodies[g.robot]).id
-                    pos, quat = relative_pose(d, gb, m.body(cc.part_bodies[g.part]).id)
-                else:
-                    pos, quat = np.asarray(g.pos, float), np.asarray(g.quat, float)
-                set_weld(m, e, pos, quat)
-                d.eq_active[e] = True
-                self.grip.hold(g.robot, g.part, True)
-                self.monitor.excluded |= self.grip.body_pairs(g.robot, g.part)
-                self.pending = [p for p in self.pending if (p[0], p[1]) != (g.robot, g.part)]
-                dev = float(np.linalg.norm(pos - g.pos)) * 1e3
-                ang = math.degrees(quat_angle(quat, g.quat))
-                detail = f"grasp '{g.part}': weld pose {dev:.3g} mm, {ang:.3g} deg from the plan's"
-            else:
-                d.eq_active[e] = False
-                opened = self.plan.at(np.array([t]))[0][0]  # the fingers' planned opening
-                acts = self.finger_act[g.robot]
-                self.pending.append((g.robot, g.part, self.act_adr[acts], opened[acts]))
-                centroid = np.empty(3)  # the part frame's centroid offset, turned to the world
-                offset = self.sim.cell.centroid_frame(g.part)[:3, 3]
-                mujoco.mju_rotVecQuat(centroid, offset, d.qpos[adr + 3 : adr + 7])
-                where = ", ".join(f"{v:.4g}" for v in d.qpos[adr : adr + 3] + centroid)
-                detail = f"release '{g.part}': centroid ({where}) m"
-            self._event(t, g.robot, g.kind, detail)
-
-    def _reopen(self) -> None:
-        """Contacts of a released part with its gripper come back once the fingers opened."""
-        keep = []
-        for robot, part, adr, target in self.pending:
-            if np.all(np.abs(self.d.qpos[adr] - target) < 1e-3):
-                self.grip.hold(robot, part, False)
-                self.monitor.excluded -= self.grip.body_pairs(robot, part)
-            else:
-                keep.append((robot, part, adr, target))
-        self.pending = keep
-
-    def _collisions(self, t: float) -> None:
-        """Collision events for the pairs that start touching at ``t`` (a pair apart for
-        less than :data:`_REARM` seconds is still the same collision)."""
-        pens = self.monitor.penetrations(self.d)
-        if not pens:
-            return
-        robot_of, tol, seen = self.monitor.robot_of, self.options["contact_tolerance"], self.seen
-        for a, b, depth in pens:
-            who = robot_of(a) or robot_of(b)
-            if not (who or depth > tol):
-                continue
-            if t - seen.get((a, b), -math.inf) > _REARM:
-                self._event(t, who, "collision", f"{a} with {b}: depth {depth * 1e3:.3g} mm")
-            seen[(a, b)] = t
 
     # ------------------------------------------------------------------ the loop
     def execute(self, progress: bool | None) -> PhysicsResult:

@@ -24,7 +24,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from workcell.cell.compile import CompiledCell
+from workcell.cell.compile import CompiledCell, subtree_bodies
 from workcell.errors import ProgramError
 
 if TYPE_CHECKING:
@@ -107,17 +107,6 @@ def plan_of(sim: Simulator, cols: NDArray[np.intp]) -> Plan:
     return Plan(np.concatenate(times), np.concatenate(rows))
 
 
-def _subtree(m: mujoco.MjModel, root: int) -> list[int]:
-    out = []
-    for b in range(m.nbody):
-        c = b
-        while c > 0 and c != root:
-            c = int(m.body_parentid[c])
-        if c == root:
-            out.append(b)
-    return out
-
-
 class GripContacts:
     """Contacts between grippers and movable parts of ``m`` (a model copy; module doc).
 
@@ -136,7 +125,7 @@ class GripContacts:
         self.bit = {r: 1 << (k + 1) for k, r in enumerate(robots)}
         self.all = sum(self.bit.values())
         self.gripper_bodies = {
-            r: _subtree(m, m.body(compiled.gripper_bodies[r]).id) for r in robots
+            r: subtree_bodies(m, m.body(compiled.gripper_bodies[r]).id) for r in robots
         }
         self.part_body = {p: m.body(b).id for p, b in compiled.part_bodies.items()}
         self.part_geoms = {

@@ -23,14 +23,10 @@ Modes (thesis §4.4; every command runs in any of them):
   (not shown); :meth:`Simulator.play` then replays them, in real time (a wait of dT per
   frame, scheduled on the wall clock) or as fast as possible.
 
-Clocks (§4.4.3): the *simulated clock* shows "the time that the action would have taken
-if the execution was on a real robot"; in path mode, "the time needed for each display
-update or step motion is known from equation 4.27. Thus the time display [...] is just
-incremented by dT for each step motion"; in joint-by-joint mode "the time is incremented
-during the motion of one joint which we chose to be the joint that has to move the
-fastest for the whole motion" (so a command takes the same simulated time,
-``max_i |Delta theta_i| / theta_dot``, in every mode); in play-back "the time is updated
-in the same manner as in the path simulation approach, but is stored in the frames".
+Clocks (§4.4.3; the thesis's words in docs/thesis.md): the *simulated clock* is the time
+the commands would take on a real robot: dT per step in path and playback mode (stored in
+the frames), and in joint-by-joint mode the time of the joint that moves most, so a
+command takes ``max_i |Delta theta_i| / theta_dot`` in every mode.
 ``joint_by_joint_clock="sequential"`` instead charges each joint its own
 ``|Delta theta_i| / theta_dot`` (their sum: what a robot moving one joint at a time would
 take). The *wall clock* is a stopwatch that runs while the simulator works (computing,
@@ -43,21 +39,14 @@ samples the Cartesian line, solves IK at each sample warm-started at the previou
 moves linearly in joints between samples (path-mode timing in every mode), checking the
 joint jumps and the tool's deviation from the line (``line_tolerance``).
 
-Grasping (§4.5; :mod:`workcell.sim.grasp`): ``close_gripper`` runs the thesis's three
-tests on every movable part; the first that passes is grasped: the weld equality of that
-gripper and part is activated with the captured relative pose (``eq_data``), the fingers
-close on the part, and from then on the part's free joint is written every frame as
-gripper pose x relative pose (exact carry; the timeline stores it). ``open_gripper``
-releases it where it is. A part may be held by two robots at once (a handoff): the first
-holder carries it and may not move while the second also holds it; when the first opens,
-the second carries it.
+Grasping (§4.5; :mod:`workcell.sim.gripping`): ``close_gripper`` grasps the first
+movable part that passes the thesis's three tests and carries it exactly (a weld) until
+``open_gripper``; a part may be held by two robots at once (a handoff).
 
-Collisions (``check_collisions``, default on): after each frame's ``mj_kinematics``,
-``mj_collision`` runs and every pair of things overlapping by more than
-``contact_tolerance`` (m) that was not overlapping in the previous frame becomes a
-``collision`` event (time, pair, depth); a held part against its own gripper is skipped.
-``stop_on_collision`` raises :class:`CollisionError` at the first one (the command is
-undone). :meth:`Simulator.clearance` gives the minimum distance between two named things.
+Collisions (``check_collisions``, default on; :mod:`workcell.sim.frames`): every pair of
+things that starts overlapping by more than ``contact_tolerance`` (m) in a frame becomes a
+``collision`` event; ``stop_on_collision`` raises :class:`CollisionError` at the first
+one. :meth:`Simulator.clearance` gives the minimum distance between two named things.
 
 Several robots at once (beyond the thesis; :mod:`workcell.sim.concurrent`): inside
 ``with sim.concurrently():`` each robot's motion commands start together and the frames
@@ -80,26 +69,22 @@ override, and the cycle-time report (``summary()["commands"]``).
 Errors: every command validates first (unknown robot: ProgramError listing the robots;
 target outside the limits: JointLimitError naming the joint and its range; bad speed or
 vector: ProgramError) and changes nothing when it fails; an exception while frames are
-applied restores joints, clocks, speeds and timeline as they were before the command.
+applied undoes the command (:mod:`workcell.sim.frames`).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
-from typing import Any
 
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell import limits
-from workcell.cell.compile import CompiledCell, compile_cell
+from workcell.cell.compile import CompiledCell, compile_cell, subtree_bodies
 from workcell.cell.workcell import Workcell
 from workcell.checks import is_finite_number, quote_angle
 from workcell.errors import (
-    CollisionError,
     ProgramError,
 )
 from workcell.plan.motion import PlanningCommands
@@ -112,14 +97,15 @@ from workcell.sim.concurrent import ConcurrentCommands
 from workcell.sim.contacts import (
     DEFAULT_TOLERANCE,
     ContactMonitor,
-    Penetration,
     contact_model,
 )
 from workcell.sim.cycle import command_record
-from workcell.sim.gripping import Carried, GraspRecord, GripperCommands, Hold
+from workcell.sim.frames import FrameRunner
+from workcell.sim.gripping import GraspRecord, GripperCommands, Hold
 from workcell.sim.motion import MotionCommands
 from workcell.sim.profiles import step_times
-from workcell.sim.timeline import DEFAULT_MEMORY_LIMIT, Event, Timeline
+from workcell.sim.readback import ReadBack
+from workcell.sim.timeline import DEFAULT_MEMORY_LIMIT, Timeline
 
 __all__ = ["JOINT_BY_JOINT_CLOCKS", "MODES", "Hold", "Simulator", "step_times"]
 
@@ -137,6 +123,8 @@ class Simulator(
     PlanningCommands,
     RestingCommands,
     TaskCommands,
+    FrameRunner,
+    ReadBack,
 ):
     """Kinematic simulator of a workcell (see the module doc).
 
@@ -205,7 +193,7 @@ class Simulator(
         self.joint_by_joint_clock = joint_by_joint_clock
         self.compiled = compile_cell(cell) if compiled is None else compiled
         # the simulator's own copy (grasps write its eq_data; contacts use its margins)
-        self.model: mujoco.MjModel = contact_model(self.compiled.model, float(contact_tolerance))
+        self.model: mujoco.MjModel = contact_model(self.compiled.model)
         self.data = mujoco.MjData(self.model)
         mujoco.mj_kinematics(self.model, self.data)
         self._qadr: dict[str, NDArray[np.intp]] = {}
@@ -228,10 +216,7 @@ class Simulator(
             for r, js in cc.finger_joints.items()
         }
         self._gripper: dict[str, int] = {r: m.body(b).id for r, b in cc.gripper_bodies.items()}
-        self._gripper_tree = {
-            r: {b for b in range(m.nbody) if self._in_subtree(b, g)}
-            for r, g in self._gripper.items()
-        }
+        self._gripper_tree = {r: set(subtree_bodies(m, g)) for r, g in self._gripper.items()}
         self._weld = {k: m.equality(e).id for k, e in cc.welds.items()}
         self._boxes = {p: cell.bounding_box(p) for p in cell.movable_parts}
         self._centroids = {p: cell.centroid_frame(p)[:3, 3] for p in cell.movable_parts}
@@ -247,87 +232,6 @@ class Simulator(
         if self.check_collisions:
             mujoco.mj_collision(m, self.data)
             self._contact_events(0.0, self.contacts.penetrations(self.data), stop=False)
-
-    def _in_subtree(self, body: int, root: int) -> bool:
-        while body > 0:
-            if body == root:
-                return True
-            body = int(self.model.body_parentid[body])
-        return False
-
-    # ------------------------------------------------------------------ read-back
-    @property
-    def robots(self) -> tuple[str, ...]:
-        """The cell's robot names."""
-        return tuple(self._qadr)
-
-    @property
-    def wall_time(self) -> float:
-        """The wall clock (s): time the simulator has spent on commands and replays."""
-        return self._wall
-
-    @property
-    def frames(self) -> int:
-        """Number of frames on the timeline (frame 0 is the initial state)."""
-        return len(self.timeline)
-
-    @property
-    def events(self) -> tuple[Event, ...]:
-        """The timeline's events."""
-        return self.timeline.events
-
-    def joints(self, robot: str) -> Array:
-        """The robot's current joint values (rad/m), a copy."""
-        return self.data.qpos[self._qadr[self._robot(robot)]].copy()
-
-    def tool_pose(self, robot: str) -> Array:
-        """The robot's current tool pose in the world (4x4), from MuJoCo's tool site."""
-        i = self._site[self._robot(robot)]
-        T = np.eye(4)
-        T[:3, :3] = self.data.site_xmat[i].reshape(3, 3)
-        T[:3, 3] = self.data.site_xpos[i]
-        return T
-
-    def speed(self, robot: str) -> float:
-        """The robot's speed (rad/s): the speed of the joint that moves most."""
-        return self._speed[self._robot(robot)]
-
-    def trajectory(self, robot: str) -> tuple[Array, Array]:
-        """(simulated times (N,), joint values (N, dof)) of every frame for one robot."""
-        adr = self._qadr[self._robot(robot)]
-        return self.timeline.sim_times(), self.timeline.qpos()[:, adr]
-
-    def part_positions(self) -> dict[str, list[float]]:
-        """World position (m) of each movable part's centroid, by name: the point grasps
-        aim at and ``place`` sets down (``part_pose`` gives the part frame's pose)."""
-        d = self.data
-        return {
-            p: (d.xpos[b] + d.xmat[b].reshape(3, 3) @ self._centroids[p]).tolist()
-            for p, b in self._part_body.items()
-        }
-
-    def clearance(self, a: str, b: str) -> float:
-        """Minimum distance (m) between two things now; negative: penetration depth.
-
-        A thing is a robot (all its links and gripper), a link or gripper body
-        (``"puma_1.link3"``), a movable or static part, or ``"ground"``; the distance is
-        MuJoCo's ``mj_geomDistance`` between their convex collision pieces.
-        """
-        return self.contacts.clearance(self.data, a, b)[0]
-
-    def summary(self) -> dict[str, Any]:
-        """The DESIGN.md ``workcell demo --json`` fields this slice knows (``mjcf`` None),
-        and ``commands``: the cycle-time records (:meth:`cycle_time`)."""
-        return {
-            "sim_time_s": self.sim_time,
-            "wall_time_s": self._wall,
-            "frames": self.frames,
-            "events": [e.to_dict() for e in self.events],
-            "collisions": sum(1 for e in self.events if e.kind == "collision"),
-            "objects": self.part_positions(),
-            "mjcf": None,
-            "commands": self.cycle_time()["commands"],
-        }
 
     # ------------------------------------------------------------------ commands
     def set_speed(self, robot: str, speed: float) -> None:
@@ -405,42 +309,6 @@ class Simulator(
         nothing; this is for runners that record or report the run up to the error."""
         self.timeline.add_event(self.sim_time, robot, "error", f"{type(exc).__name__}: {exc}")
 
-    def play(self, realtime: bool | None = None, start: int = 0) -> int:
-        """Replay the stored frames from ``start`` on (any mode; meant for playback).
-
-        Each frame is shown (``mj_kinematics``); with ``realtime`` (default: the
-        simulator's) frame i is shown when the wall clock has run ``t_i - t_start`` since
-        the replay began (the thesis's wait of dT per frame). The frames' wall times are
-        overwritten with their display times. Returns the number of frames shown.
-        """
-        rt = self.realtime if realtime is None else bool(realtime)
-        n = len(self.timeline)
-        if not 0 <= start < n:
-            raise ProgramError(f"play: start must be a frame in 0..{n - 1}, got {start!r}")
-        m, d = self.model, self.data
-        qpos, kin, clock, sleep = d.qpos, mujoco.mj_kinematics, time.perf_counter, time.sleep
-        final = d.qpos.copy()
-        w0 = self._wall
-        t_first = self.timeline.frame(start)[0]
-        c0 = clock()
-        try:
-            for i, rows in self.timeline.iter_blocks(start):
-                walls = np.empty(len(rows))
-                for k, row in enumerate(rows):
-                    if rt:
-                        lag = c0 + (row[0] - t_first) - clock()
-                        if lag > 0:
-                            sleep(lag)
-                    qpos[:] = row[2:]
-                    kin(m, d)
-                    walls[k] = clock()
-                self.timeline.set_wall_times(i, w0 + (walls - c0))
-        finally:
-            qpos[:] = final
-            kin(m, d)
-            self._wall = w0 + (clock() - c0)
-        return n - start
-
     # ------------------------------------------------------------------ internals
     def _robot(self, robot: object) -> str:
         if not isinstance(robot, str) or robot not in self._qadr:
@@ -464,126 +332,6 @@ class Simulator(
         if not np.all(np.isfinite(a)):
             raise ProgramError(f"{command} '{name}': {what} must be finite, got {a.tolist()}")
         return a
-
-    def _emit(
-        self,
-        times: Array,
-        Q: Array,
-        carried: list[Carried],
-        mover: str | None = None,
-    ) -> None:
-        """Apply (path, joint-by-joint) or store (playback) frames; advance both clocks.
-
-        Carried parts are posed at gripper x relative pose in every frame (their columns
-        of Q are overwritten); with collision checks every frame is computed and checked
-        (a collision involving ``mover``, the robot that moves, is charged to it).
-        """
-        k = len(times)
-        if k == 0:
-            return
-        m, d = self.model, self.data
-        clock = time.perf_counter
-        w0 = self._wall
-        c0 = clock()
-        check = self.check_collisions
-        first = len(self.timeline)  # frame j of this batch becomes timeline frame first + j
-        if self.mode == "playback" and not carried and not check:
-            walls = np.full(k, clock())
-            d.qpos[:] = Q[-1]
-            mujoco.mj_kinematics(m, d)
-        else:
-            walls = np.empty(k)
-            qpos, kin, collide, mul = (
-                d.qpos,
-                mujoco.mj_kinematics,
-                mujoco.mj_collision,
-                mujoco.mju_mulPose,
-            )
-            xpos, xquat = d.xpos, d.xquat
-            p, q = np.empty(3), np.empty(4)
-            for j in range(k):
-                qpos[:] = Q[j]
-                kin(m, d)
-                if carried:
-                    for g, adr, rp, rq in carried:
-                        mul(p, q, xpos[g], xquat[g], rp, rq)
-                        qpos[adr : adr + 3] = p
-                        qpos[adr + 3 : adr + 7] = q
-                        Q[j, adr : adr + 7] = qpos[adr : adr + 7]
-                    kin(m, d)
-                if check:
-                    collide(m, d)
-                    if d.ncon or self._touching:
-                        pens = self.contacts.penetrations(d)
-                        self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
-                walls[j] = clock()
-        self.timeline.extend(times, w0 + (walls - c0), Q)
-        self.sim_time = float(times[-1])
-        self._wall = w0 + (clock() - c0)
-
-    def _contact_events(
-        self,
-        t: float,
-        pens: list[Penetration],
-        *,
-        stop: bool = True,
-        mover: str | None = None,
-        frame: int = 0,
-    ) -> None:
-        """Log the pairs that start overlapping at ``t`` in timeline ``frame`` (the colliding
-        frame, which the event carries); raise if stopping on collisions."""
-        if not pens and not self._touching:
-            return
-        now = {(a, b) for a, b, _ in pens}
-        onset = [p for p in pens if (p[0], p[1]) not in self._touching]
-        self._touching = now
-        for a, b, depth in onset:
-            holder = {h.part: r for r, h in self._holds.items()}
-            involved = [self.contacts.robot_of(x) or holder.get(x) for x in (a, b)]
-            robot = mover if mover in involved else (involved[0] or involved[1])
-            detail = f"{a} with {b}: depth {depth * 1e3:.3g} mm"
-            self.timeline.add_event(t, robot, "collision", detail, frame=frame)
-            if stop and self.stop_on_collision:
-                raise CollisionError(f"collision at t = {t:.6g} s: {detail}")
-
-    @contextmanager
-    def _transaction(self) -> Iterator[None]:
-        """Undo everything (joints, parts, grasps, clocks, speeds, timeline) if the body raises."""
-        qpos = self.data.qpos.copy()
-        saved = (
-            self.sim_time,
-            self._wall,
-            dict(self._speed),
-            self.timeline.mark(),
-            len(self.grasps),
-            dict(self._holds),
-            {p: list(r) for p, r in self._holders.items()},
-            set(self._touching),
-            set(self.contacts.excluded),
-            self.data.eq_active.copy(),
-            self.model.eq_data.copy(),
-        )
-        try:
-            yield
-        except BaseException:
-            (
-                self.sim_time,
-                self._wall,
-                self._speed,
-                mark,
-                n_grasps,
-                self._holds,
-                self._holders,
-                self._touching,
-                self.contacts.excluded,
-                self.data.eq_active[:],
-                self.model.eq_data[:],
-            ) = saved
-            self.timeline.truncate(mark)
-            del self.grasps[n_grasps:]
-            self.data.qpos[:] = qpos
-            mujoco.mj_kinematics(self.model, self.data)
-            raise
 
     def __repr__(self) -> str:
         return (

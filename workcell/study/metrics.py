@@ -54,7 +54,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from workcell.cell.compile import CompiledCell
+from workcell.cell.compile import CompiledCell, subtree_bodies
 from workcell.cell.workcell import RobotPlacement
 from workcell.errors import KinematicsError
 from workcell.robots.ik_closed import config_of
@@ -89,14 +89,6 @@ class Clearance:
     minimum: float
     bound: float
     pair: str
-
-
-def _subtree(m: mujoco.MjModel, root: int) -> set[int]:
-    out = {root}
-    for b in range(root + 1, m.nbody):
-        if int(m.body_parentid[b]) in out:
-            out.add(b)
-    return out
 
 
 def _joint_path(m: mujoco.MjModel, j: int, body: int) -> list[int]:
@@ -145,7 +137,7 @@ class ClearanceModel:
         self.joints: list[tuple[NDArray[np.intp], Array]] = []  # (qpos addresses, rho)
         for r in robots:
             root = m.body(f"{compiled.robot_prefixes[r]}link0").id
-            bodies = _subtree(m, root)
+            bodies = set(subtree_bodies(m, root))
             joints = [j for j in range(m.njnt) if int(m.jnt_bodyid[j]) in bodies]
             geoms = [g for g in range(m.ngeom) if self.contype[g] and m.geom_bodyid[g] in bodies]
             rho = np.array([self._rho(m, d, j, geoms) for j in joints])
@@ -161,7 +153,7 @@ class ClearanceModel:
         slide = mujoco.mjtJoint.mjJNT_SLIDE
         if m.jnt_type[j] == slide:
             return 1.0  # a slide moves every point by exactly its own travel
-        below = _subtree(m, int(m.jnt_bodyid[j]))
+        below = set(subtree_bodies(m, int(m.jnt_bodyid[j])))
         axis, anchor = d.xaxis[j], d.xanchor[j]
 
         def off_axis(v: Array) -> float:

@@ -1,0 +1,202 @@
+"""Frames of the simulator: applying them, collision events, undo, replay (a mixin of
+:class:`~workcell.sim.simulator.Simulator`).
+
+Every command ends in :meth:`FrameRunner._emit`: in path and joint-by-joint mode each
+frame is shown (``mj_kinematics``) as it is computed, in playback mode frames are only
+stored (:meth:`FrameRunner.play` replays them); carried parts are posed at gripper pose x
+relative pose in every frame, and both clocks advance.
+
+Collisions (``check_collisions``, default on): after each frame's ``mj_kinematics``,
+``mj_collision`` runs and every pair of things overlapping by more than
+``contact_tolerance`` (m) that was not overlapping in the previous frame becomes a
+``collision`` event (time, pair, depth); a held part against its own gripper is skipped.
+``stop_on_collision`` raises :class:`CollisionError` at the first one (the command is
+undone). :meth:`Simulator.clearance <workcell.sim.simulator.Simulator.clearance>` gives
+the minimum distance between two named things.
+
+Undo (:meth:`FrameRunner._transaction`): an exception while frames are applied restores
+joints, parts, grasps, clocks, speeds and timeline as they were before the command.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from workcell.errors import CollisionError, ProgramError
+from workcell.sim.contacts import Penetration
+from workcell.sim.gripping import Carried
+
+if TYPE_CHECKING:
+    from workcell.sim.simulator import Simulator
+
+__all__ = ["FrameRunner"]
+
+Array = NDArray[np.float64]
+
+
+class FrameRunner:
+    """Applying, checking, undoing and replaying frames (module doc)."""
+
+    def play(self: Simulator, realtime: bool | None = None, start: int = 0) -> int:
+        """Replay the stored frames from ``start`` on (any mode; meant for playback).
+
+        Each frame is shown (``mj_kinematics``); with ``realtime`` (default: the
+        simulator's) frame i is shown when the wall clock has run ``t_i - t_start`` since
+        the replay began (the thesis's wait of dT per frame). The frames' wall times are
+        overwritten with their display times. Returns the number of frames shown.
+        """
+        rt = self.realtime if realtime is None else bool(realtime)
+        n = len(self.timeline)
+        if not 0 <= start < n:
+            raise ProgramError(f"play: start must be a frame in 0..{n - 1}, got {start!r}")
+        m, d = self.model, self.data
+        qpos, kin, clock, sleep = d.qpos, mujoco.mj_kinematics, time.perf_counter, time.sleep
+        final = d.qpos.copy()
+        w0 = self._wall
+        t_first = self.timeline.frame(start)[0]
+        c0 = clock()
+        try:
+            for i, rows in self.timeline.iter_blocks(start):
+                walls = np.empty(len(rows))
+                for k, row in enumerate(rows):
+                    if rt:
+                        lag = c0 + (row[0] - t_first) - clock()
+                        if lag > 0:
+                            sleep(lag)
+                    qpos[:] = row[2:]
+                    kin(m, d)
+                    walls[k] = clock()
+                self.timeline.set_wall_times(i, w0 + (walls - c0))
+        finally:
+            qpos[:] = final
+            kin(m, d)
+            self._wall = w0 + (clock() - c0)
+        return n - start
+
+    # ------------------------------------------------------------------ internals
+    def _emit(
+        self: Simulator,
+        times: Array,
+        Q: Array,
+        carried: list[Carried],
+        mover: str | None = None,
+    ) -> None:
+        """Apply (path, joint-by-joint) or store (playback) frames; advance both clocks.
+
+        Carried parts are posed at gripper x relative pose in every frame (their columns
+        of Q are overwritten); with collision checks every frame is computed and checked
+        (a collision involving ``mover``, the robot that moves, is charged to it).
+        """
+        k = len(times)
+        if k == 0:
+            return
+        m, d = self.model, self.data
+        clock = time.perf_counter
+        w0 = self._wall
+        c0 = clock()
+        check = self.check_collisions
+        first = len(self.timeline)  # frame j of this batch becomes timeline frame first + j
+        if self.mode == "playback" and not carried and not check:
+            walls = np.full(k, clock())
+            d.qpos[:] = Q[-1]
+            mujoco.mj_kinematics(m, d)
+        else:
+            walls = np.empty(k)
+            qpos, kin, collide, mul = (
+                d.qpos,
+                mujoco.mj_kinematics,
+                mujoco.mj_collision,
+                mujoco.mju_mulPose,
+            )
+            xpos, xquat = d.xpos, d.xquat
+            p, q = np.empty(3), np.empty(4)
+            for j in range(k):
+                qpos[:] = Q[j]
+                kin(m, d)
+                if carried:
+                    for g, adr, rp, rq in carried:
+                        mul(p, q, xpos[g], xquat[g], rp, rq)
+                        qpos[adr : adr + 3] = p
+                        qpos[adr + 3 : adr + 7] = q
+                        Q[j, adr : adr + 7] = qpos[adr : adr + 7]
+                    kin(m, d)
+                if check:
+                    collide(m, d)
+                    if d.ncon or self._touching:
+                        pens = self.contacts.penetrations(d)
+                        self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
+                walls[j] = clock()
+        self.timeline.extend(times, w0 + (walls - c0), Q)
+        self.sim_time = float(times[-1])
+        self._wall = w0 + (clock() - c0)
+
+    def _contact_events(
+        self: Simulator,
+        t: float,
+        pens: list[Penetration],
+        *,
+        stop: bool = True,
+        mover: str | None = None,
+        frame: int = 0,
+    ) -> None:
+        """Log the pairs that start overlapping at ``t`` in timeline ``frame`` (the colliding
+        frame, which the event carries); raise if stopping on collisions."""
+        if not pens and not self._touching:
+            return
+        now = {(a, b) for a, b, _ in pens}
+        onset = [p for p in pens if (p[0], p[1]) not in self._touching]
+        self._touching = now
+        for a, b, depth in onset:
+            holder = {h.part: r for r, h in self._holds.items()}
+            involved = [self.contacts.robot_of(x) or holder.get(x) for x in (a, b)]
+            robot = mover if mover in involved else (involved[0] or involved[1])
+            detail = f"{a} with {b}: depth {depth * 1e3:.3g} mm"
+            self.timeline.add_event(t, robot, "collision", detail, frame=frame)
+            if stop and self.stop_on_collision:
+                raise CollisionError(f"collision at t = {t:.6g} s: {detail}")
+
+    @contextmanager
+    def _transaction(self: Simulator) -> Iterator[None]:
+        """Undo everything (joints, parts, grasps, clocks, speeds, timeline) if the body raises."""
+        qpos = self.data.qpos.copy()
+        saved = (
+            self.sim_time,
+            self._wall,
+            dict(self._speed),
+            self.timeline.mark(),
+            len(self.grasps),
+            dict(self._holds),
+            {p: list(r) for p, r in self._holders.items()},
+            set(self._touching),
+            set(self.contacts.excluded),
+            self.data.eq_active.copy(),
+            self.model.eq_data.copy(),
+        )
+        try:
+            yield
+        except BaseException:
+            (
+                self.sim_time,
+                self._wall,
+                self._speed,
+                mark,
+                n_grasps,
+                self._holds,
+                self._holders,
+                self._touching,
+                self.contacts.excluded,
+                self.data.eq_active[:],
+                self.model.eq_data[:],
+            ) = saved
+            self.timeline.truncate(mark)
+            del self.grasps[n_grasps:]
+            self.data.qpos[:] = qpos
+            mujoco.mj_kinematics(self.model, self.data)
+            raise
