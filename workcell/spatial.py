@@ -58,6 +58,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 _LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
+_LAST_ROW_LIST = [0.0, 0.0, 0.0, 1.0]
 _QUAT_ROT_TOL = 1e-6  # how far from orthonormal a matrix may be to take its quaternion
 
 
@@ -315,13 +316,18 @@ def as_transforms(transforms: ArrayLike, *, rigid: bool = False, what: str = "tr
 def _valid_single(rows: list[list[float]], rigid: bool) -> bool:
     """Fast check of one 4x4 (nested lists) against :func:`as_transforms`' rules; False
     sends it to the vectorised path, which says what is wrong."""
-    (a, b, c, _), (d, e, f, _), (g, h, i, _), last = rows
-    if not math.isfinite(sum(rows[0]) + sum(rows[1]) + sum(rows[2]) + sum(rows[3])):
+    r0, r1, r2, last = rows
+    (a, b, c, x), (d, e, f, y), (g, h, i, z) = r0, r1, r2
+    if not math.isfinite(sum(r0) + sum(r1) + sum(r2) + sum(last)):
         return False  # an entry is not finite (or so large that the sum overflows)
     bound = limits.current().max_coordinate
-    if any(abs(v) > bound for row in rows[:3] for v in row):
+    if max(a, b, c, x, d, e, f, y, g, h, i, z) > bound:
         return False
-    if max(abs(last[0]), abs(last[1]), abs(last[2]), abs(last[3] - 1.0)) > 1e-12:
+    if min(a, b, c, x, d, e, f, y, g, h, i, z) < -bound:
+        return False
+    if last != _LAST_ROW_LIST and (
+        max(abs(last[0]), abs(last[1]), abs(last[2]), abs(last[3] - 1.0)) > 1e-12
+    ):
         return False
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     if abs(det) <= 1e-12:

@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 import weakref
 from dataclasses import dataclass
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -70,6 +71,9 @@ EXACT_TOL = 1e-9  # m and rad: a solution is exact when FK(q) is this close to T
 _ORTHO_TOL = 1e-13  # |R^T R - I| of base and tool below which errors are measured in floats
 _CF = "closed-form"
 _INV_TWO_PI = 1.0 / (2.0 * math.pi)
+_NO_NEAR: tuple[float | None, ...] = (None,) * 6
+_chain = chain.from_iterable
+_new_solution = tuple.__new__  # IKSolution from a full tuple: skips the named tuple's __new__
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,6 +93,7 @@ class _Solver:
     t_end: tuple[float, float, float]  # the tool point in the model's end frame (m)
     floats: bool  # base and tool rotations orthonormal to rounding: errors in floats
     joints: tuple[tuple[float, float, float, float], ...]  # lo, hi, lo_t, hi_t per joint
+    ref0: tuple[float, ...]  # the family angles of q = 0 (rad): the free angles by default
 
 
 _CACHE: weakref.WeakKeyDictionary[Robot, _Solver | str] = weakref.WeakKeyDictionary()
@@ -128,6 +133,9 @@ def _detect(robot: Robot) -> _Solver | str:
             post=post,
             t_end=tuple(float(v) for v in model.end[:3, 3]),
             floats=deviation <= _ORTHO_TOL,
+            ref0=tuple(
+                float(s) * 0.0 - float(o) for s, o in zip(model.signs, model.offsets, strict=True)
+            ),
             joints=tuple(
                 zip(
                     robot._lo.tolist(),
@@ -229,28 +237,27 @@ def ik_report(
     KinematicsError for a robot without a family, GeometryError for a bad T.
     """
     S = _solver(robot)
-    ref = _reference(robot, q_current, ((6,),))
+    if q_current is None:  # the free angles at singular poses come from q = 0
+        ref, ref_t, near = None, S.ref0, _NO_NEAR
+    else:
+        ref = _reference(robot, q_current, ((6,),))
+        ref_l = ref.tolist()
+        signs, offs = S.signs, S.offs
+        ref_t = tuple(signs[j] * ref_l[j] - offs[j] for j in range(6))
+        near = tuple(v * _INV_TWO_PI for v in ref_l)
     M, rows = _pose(robot, S, T)
-    ref_l = None if ref is None else ref.tolist()
-    # the free angles at singular poses come from q_current, else from q = 0
-    base_q = ref_l if ref_l is not None else (0.0,) * 6
-    ref_t = tuple(S.signs[j] * base_q[j] - S.offs[j] for j in range(6))
     sols, maybe_dup, reason = S.solve_one(S.model, rows, ref_t)
     if not sols:
         return [], reason
-    near: tuple[float | None, ...] = (None,) * 6
-    if ref_l is not None:
-        near = tuple(v * _INV_TWO_PI for v in ref_l)
-    slots = [sol[0] for sol in sols]
-    singular = [sol[2] for sol in sols]
     Qs, qs, flags = rows_of(S.signs, S.offs, S.joints, sols, near)
     if maybe_dup:
         keep = distinct(np.array(Qs)).tolist()
-        pick = [i for i, k in enumerate(keep) if k]
-        slots, singular = [slots[i] for i in pick], [singular[i] for i in pick]
-        qs, flags = [qs[i] for i in pick], [flags[i] for i in pick]
+        if not all(keep):
+            sols = [s for s, k in zip(sols, keep, strict=True) if k]
+            qs = [q for q, k in zip(qs, keep, strict=True) if k]
+            flags = [f for f, k in zip(flags, keep, strict=True) if k]
     m = len(qs)
-    Qw = np.array(qs)
+    Qw = np.fromiter(_chain(qs), np.float64, 6 * m).reshape(m, 6)  # np.array(qs), faster
     if S.floats:
         errors = S.errors(S.model, qs, rows, S.t_end)
     else:  # through the robot's own chain, which applies base and tool as they are
@@ -259,28 +266,31 @@ def ik_report(
             (math.sqrt(ep), 2.0 * math.asin(min(1.0, math.sqrt((ex + ey + ez) / 8.0))))
             for ex, ey, ez, ep in (D * D).sum(axis=1).tolist()
         ]
-    if ref is None:
-        order = [i for i in range(m) if flags[i] is None] + [
-            i for i in range(m) if flags[i] is not None
-        ]
-    else:
+    rows_q = list(Qw)
+    parts: Any = zip(sols, errors, flags, rows_q, strict=True)
+    if ref is not None:
         dist = np.abs(Qw - ref)
         far, total = dist.max(axis=1).tolist(), dist.sum(axis=1).tolist()
-        order = sorted(range(m), key=lambda i: (flags[i] is not None, far[i], total[i], slots[i]))
-    out = []
-    rows_q = list(Qw)
-    for i in order:
-        dp, dr = errors[i]
-        bad = flags[i]
+        order = sorted(range(m), key=lambda i: (flags[i] is not None, far[i], total[i], sols[i][0]))
+        parts = [(sols[i], errors[i], flags[i], rows_q[i]) for i in order]
+    out = []  # within limits first, each group in slot order (or nearest first)
+    outside = []
+    new = _new_solution
+    for (slot, _, singular), (dp, dr), bad, q in parts:
         if bad is not None:
             why = limits_reason(bad)
-        elif dp > EXACT_TOL or dr > EXACT_TOL:
+            sol = (q, False, CONFIGS[slot], False, singular, dp, dr, 0, why, _CF)
+            outside.append(new(IKSolution, sol))
+            continue
+        why = ""
+        if dp > EXACT_TOL or dr > EXACT_TOL:
             why = f"pose not reached exactly: errors {dp:.1e} m, {dr:.1e} rad"
-        else:
-            why = ""
-        c = CONFIGS[slots[i]]
-        out.append(IKSolution(rows_q[i], not why, c, bad is None, singular[i], dp, dr, 0, why, _CF))
-    if all(f is not None for f in flags):
+        out.append(
+            new(IKSolution, (q, not why, CONFIGS[slot], True, singular, dp, dr, 0, why, _CF))
+        )
+    in_limits = len(out)
+    out += outside
+    if not in_limits:
         reason = f"no solution within the joint limits ({m} found outside them)"
     return out, reason
 

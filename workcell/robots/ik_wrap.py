@@ -53,7 +53,9 @@ def rows_of(
     to ``near``, q_current in turns, else Q) and the flags (None, or per joint whether it
     has an in-limit value). A value within its limits and within half a turn of ``near``
     is its own representative (``wrap_batch``'s k = 0); :func:`_shift` does the others.
-    Written out joint by joint: this runs for every pose."""
+    Written out joint by joint: this runs for every pose. Joints 1 to 3 are wrapped once
+    for a run of solutions that share theta1..3 (the wrist twins; the elbow pairs share
+    theta1): the same value gives the same bits."""
     (s1, s2, s3, s4, s5, s6), (o1, o2, o3, o4, o5, o6) = signs, offs
     (l1, h1, _, _), (l2, h2, _, _), (l3, h3, _, _) = joints[:3]
     (l4, h4, _, _), (l5, h5, _, _), (l6, h6, _, _) = joints[3:]
@@ -62,20 +64,28 @@ def rows_of(
     Qs: list[list[float]] = []
     rows: list[list[float]] = []
     flags: list[tuple[bool, ...] | None] = []
+    p1 = p2 = p3 = math.nan  # theta1..3 of the previous solution (NaN: none yet)
+    q1 = q2 = q3 = w1 = w2 = w3 = 0.0
     for _, (t1, t2, t3, t4, t5, t6), _ in sols:
-        q1 = pi - (pi - s1 * (t1 + o1)) % two_pi
-        q2 = pi - (pi - s2 * (t2 + o2)) % two_pi
-        q3 = pi - (pi - s3 * (t3 + o3)) % two_pi
+        if t1 != p1:
+            p1, p2 = t1, math.nan
+            q1 = pi - (pi - s1 * (t1 + o1)) % two_pi
+            w1 = q1
+            if not (l1 <= q1 <= h1 and (n1 is None or -0.5 <= n1 - q1 * inv <= 0.5)):
+                w1 = _shift(joints[0], q1, n1)
+        if t2 != p2 or t3 != p3:
+            p2, p3 = t2, t3
+            q2 = pi - (pi - s2 * (t2 + o2)) % two_pi
+            q3 = pi - (pi - s3 * (t3 + o3)) % two_pi
+            w2, w3 = q2, q3
+            if not (l2 <= q2 <= h2 and (n2 is None or -0.5 <= n2 - q2 * inv <= 0.5)):
+                w2 = _shift(joints[1], q2, n2)
+            if not (l3 <= q3 <= h3 and (n3 is None or -0.5 <= n3 - q3 * inv <= 0.5)):
+                w3 = _shift(joints[2], q3, n3)
         q4 = pi - (pi - s4 * (t4 + o4)) % two_pi
         q5 = pi - (pi - s5 * (t5 + o5)) % two_pi
         q6 = pi - (pi - s6 * (t6 + o6)) % two_pi
-        w1, w2, w3, w4, w5, w6 = q1, q2, q3, q4, q5, q6
-        if not (l1 <= q1 <= h1 and (n1 is None or -0.5 <= n1 - q1 * inv <= 0.5)):
-            w1 = _shift(joints[0], q1, n1)
-        if not (l2 <= q2 <= h2 and (n2 is None or -0.5 <= n2 - q2 * inv <= 0.5)):
-            w2 = _shift(joints[1], q2, n2)
-        if not (l3 <= q3 <= h3 and (n3 is None or -0.5 <= n3 - q3 * inv <= 0.5)):
-            w3 = _shift(joints[2], q3, n3)
+        w4, w5, w6 = q4, q5, q6
         if not (l4 <= q4 <= h4 and (n4 is None or -0.5 <= n4 - q4 * inv <= 0.5)):
             w4 = _shift(joints[3], q4, n4)
         if not (l5 <= q5 <= h5 and (n5 is None or -0.5 <= n5 - q5 * inv <= 0.5)):
@@ -86,8 +96,10 @@ def rows_of(
         Qs.append(Q)
         if w1 is None or w2 is None or w3 is None or w4 is None or w5 is None or w6 is None:
             rows.append(Q)
-            w = (w1, w2, w3, w4, w5, w6)
-            flags.append(tuple(v is not None for v in w))
+            flags.append(
+                (w1 is not None, w2 is not None, w3 is not None,
+                 w4 is not None, w5 is not None, w6 is not None)
+            )  # fmt: skip
         else:
             rows.append([w1, w2, w3, w4, w5, w6])
             flags.append(None)

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -77,6 +78,12 @@ class OPWModel(AxisModel):
     c2: float
     c3: float
     family: str = "opw"
+
+    @cached_property
+    def forearm(self) -> tuple[float, float]:
+        """(L, gamma): the wrist centre's distance from axis 3, sqrt(c3^2 + a2^2) (m), and
+        its angle off the forearm, atan2(a2, c3) (rad); computed once per model."""
+        return math.hypot(self.c3, self.a2), math.atan2(self.a2, self.c3)
 
     @property
     def c4(self) -> float:

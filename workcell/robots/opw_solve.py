@@ -48,13 +48,8 @@ Solution = tuple[int, tuple[float, float, float, float, float, float], bool]
 """(slot in CONFIGS: 4 r + 2 d + f, OPW angles theta1..6 (rad), singular)."""
 
 
-def _constants(m: OPWModel) -> tuple[float, float, float]:
-    L = math.hypot(m.c3, m.a2)
-    return L, math.atan2(m.a2, m.c3), m.signs[4]
-
-
 def _unreachable(m: OPWModel, rho: float, far: bool) -> str:
-    L = math.hypot(m.c3, m.a2)
+    L = m.forearm[0]
     if far:
         return (
             f"out of reach: the wrist centre is {rho:.4g} m from the shoulder, beyond the "
@@ -76,7 +71,7 @@ def solve_one(
     """
     (r00, _r01, r02, px), (r10, _r11, r12, py), (r20, _r21, r22, pz) = M
     a1, b, c1, c2 = m.a1, m.b, m.c1, m.c2
-    L, gamma, s5 = _constants(m)
+    (L, gamma), s5 = m.forearm, m.signs[4]
     cos, sin, atan2, sqrt = math.cos, math.sin, math.atan2, math.sqrt
     r2 = px * px + py * py
     xs2 = r2 - b * b
@@ -95,6 +90,8 @@ def solve_one(
     phi = t1_ref if shoulder_free else atan2(py, px)
     v = pz - c1
     cc = c2 * c2 + L * L
+    twice = 2.0 * c2 * L
+    acos, hypot = math.acos, math.hypot
     out: list[Solution] = []
     reasons: list[str] = []
     shoulder = shoulder_free or xs < SINGULAR_TOL * max(sqrt(r2), 1e-300)
@@ -104,16 +101,17 @@ def solve_one(
         t1 = phi - atan2(b, x)
         u = x - a1
         rho2 = u * u + v * v
-        ck = (rho2 - cc) / (2.0 * c2 * L)
+        ck = (rho2 - cc) / twice
         if ck > 1.0 or ck < -1.0:
             rho = sqrt(rho2)
             if rho > c2 + L + REACH_TOL or rho < abs(c2 - L) - REACH_TOL:
                 reasons.append(_unreachable(m, rho, rho > c2 + L))
                 continue
             ck = 1.0 if ck > 1.0 else -1.0  # on the boundary, up to rounding
-        kappa = math.acos(ck)
-        elbow = min(kappa, _PI - kappa) < SINGULAR_TOL  # stretched or folded
-        if min(kappa, _PI - kappa) < DEGENERATE:
+        kappa = acos(ck)
+        bend = _PI - kappa if kappa > _PI - kappa else kappa  # min(kappa, pi - kappa)
+        elbow = bend < SINGULAR_TOL  # stretched or folded
+        if bend < DEGENERATE:
             maybe_dup = True
         phv = atan2(u, v)
         c1_, s1_ = cos(t1), sin(t1)
@@ -127,7 +125,7 @@ def solve_one(
             c23, s23 = cos(t23), sin(t23)
             m02, m12, m22 = c23 * a2_ - s23 * r22, b2, s23 * a2_ + c23 * r22
             m00, m10, m20 = c23 * a0 - s23 * r20, b0, s23 * a0 + c23 * r20
-            s5abs = math.hypot(m02, m12)
+            s5abs = hypot(m02, m12)
             if s5abs < ALIGNED_TOL:
                 t4, t5 = t4_ref, (0.0 if m22 > 0.0 else _PI)
             else:
@@ -136,11 +134,12 @@ def solve_one(
             t6 = atan2(-s4 * m00 + c4 * m10, c5 * (c4 * m00 + s4 * m10) - sn5 * m20)
             singular = s5abs < SINGULAR_TOL or shoulder or elbow
             slot = 4 * right + 2 * (not up)
-            first = (t1, t2, t23 - t2, t4, t5, t6)
+            t3 = t23 - t2
+            first = (t1, t2, t3, t4, t5, t6)
             if s5abs < ALIGNED_TOL:
                 out.append((slot, first, singular))
                 continue
-            twin = (t1, t2, t23 - t2, t4 + _PI, -t5, t6 + _PI)
+            twin = (t1, t2, t3, t4 + _PI, -t5, t6 + _PI)
             # the first has sin t5 > 0: letter n when sign5 < 0
             n_first, f_first = (first, twin) if s5 < 0 else (twin, first)
             out.append((slot, n_first, singular))
@@ -153,7 +152,7 @@ def solve_one(
 def letters(m: OPWModel, theta: Array) -> str:
     """Configuration letters of the OPW angles theta (6,) rad (module doc of opw)."""
     _t1, t2, t3, _, t5, _ = (float(t) for t in theta)
-    L, gamma, s5 = _constants(m)
+    (L, gamma), s5 = m.forearm, m.signs[4]
     t23 = t2 + t3
     ex, ez = m.c2 * math.sin(t2), m.c2 * math.cos(t2)  # elbow from the shoulder
     u = ex + L * math.sin(t23 + gamma)
@@ -177,23 +176,31 @@ def pose_errors(
 
     The tool point (``t_end`` in the end frame) against the target's, and
     2 asin(|R - R_M|_F / sqrt(8)); both measured in the forearm frame Rz(t1) Ry(t23)
-    (a rotation: the same numbers). Rows with the same theta1..3 share the arm terms.
+    (a rotation: the same numbers). Rows with the same q1..3 as the row before share the
+    arm terms; a tool point on axis 6 (tx = ty = 0) skips their terms, and one at the
+    wrist centre (t_end = 0) makes the position error an arm term: the same numbers up
+    to the sign of a zero, which is squared.
     """
     (b00, b01, b02, px), (b10, b11, b12, py), (b20, b21, b22, pz) = M
     tx, ty, tz = t_end
-    gx = px + b00 * tx + b01 * ty + b02 * tz  # the target's tool point
-    gy = py + b10 * tx + b11 * ty + b12 * tz
-    gz = pz + b20 * tx + b21 * ty + b22 * tz
+    on_axis = tx == 0.0 and ty == 0.0
+    at_centre = on_axis and tz == 0.0
+    if on_axis:
+        gx, gy, gz = px + b02 * tz, py + b12 * tz, pz + b22 * tz  # the target's tool point
+    else:
+        gx = px + b00 * tx + b01 * ty + b02 * tz
+        gy = py + b10 * tx + b11 * ty + b12 * tz
+        gz = pz + b20 * tx + b21 * ty + b22 * tz
     a1, b, c1, c2 = m.a1, m.b, m.c1, m.c2
-    L, gamma, _ = _constants(m)
+    L, gamma = m.forearm
     cos, sin, sqrt, asin = math.cos, math.sin, math.sqrt, math.asin
     (k1, k2, k3, k4, k5, k6), (o1, o2, o3, o4, o5, o6) = m.signs, m.offsets
     out: list[tuple[float, float]] = []
-    last = None
+    p1 = p2 = p3 = math.nan  # q1..3 of the previous row (NaN: none yet)
+    n00 = n01 = n02 = n10 = n11 = n12 = n20 = n21 = n22 = e0 = e1 = e2 = dp = 0.0
     for q1, q2, q3, q4, q5, q6 in qs:
-        t4, t5, t6 = k4 * q4 - o4, k5 * q5 - o5, k6 * q6 - o6
-        if (q1, q2, q3) != last:
-            last = (q1, q2, q3)
+        if q1 != p1 or q2 != p2 or q3 != p3:
+            p1, p2, p3 = q1, q2, q3
             t1, t2 = k1 * q1 - o1, k2 * q2 - o2
             t23 = t2 + k3 * q3 - o3
             cs1, sn1, c23, s23 = cos(t1), sin(t1), cos(t23), sin(t23)
@@ -209,21 +216,32 @@ def pose_errors(
             # e = Ry(-t23) ((x, b, z) - Rz(-t1) g): wrist centre minus target tool point
             dx, dy, dz = x - (cs1 * gx + sn1 * gy), b - (cs1 * gy - sn1 * gx), z - gz
             e0, e1, e2 = c23 * dx - s23 * dz, dy, s23 * dx + c23 * dz
+            if at_centre:
+                dp = sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        t4, t5, t6 = k4 * q4 - o4, k5 * q5 - o5, k6 * q6 - o6
         ca, sa, cb, sb, cc, sc = cos(t4), sin(t4), cos(t5), sin(t5), cos(t6), sin(t6)
-        v00, v01, v02 = ca * cb * cc - sa * sc, -ca * cb * sc - sa * cc, ca * sb
-        v10, v11, v12 = sa * cb * cc + ca * sc, -sa * cb * sc + ca * cc, sa * sb
-        v20, v21, v22 = -sb * cc, sb * sc, cb
-        dx = e0 + v00 * tx + v01 * ty + v02 * tz
-        dy = e1 + v10 * tx + v11 * ty + v12 * tz
-        dz = e2 + v20 * tx + v21 * ty + v22 * tz
+        cacb, sacb = ca * cb, sa * cb
+        v00, v01, v02 = cacb * cc - sa * sc, -cacb * sc - sa * cc, ca * sb
+        v10, v11, v12 = sacb * cc + ca * sc, -sacb * sc + ca * cc, sa * sb
+        v20, v21 = -sb * cc, sb * sc
+        if at_centre:
+            pass
+        elif on_axis:
+            dx, dy, dz = e0 + v02 * tz, e1 + v12 * tz, e2 + cb * tz
+            dp = sqrt(dx * dx + dy * dy + dz * dz)
+        else:
+            dx = e0 + v00 * tx + v01 * ty + v02 * tz
+            dy = e1 + v10 * tx + v11 * ty + v12 * tz
+            dz = e2 + v20 * tx + v21 * ty + cb * tz
+            dp = sqrt(dx * dx + dy * dy + dz * dz)
         f0, f1, f2 = v00 - n00, v01 - n01, v02 - n02
         f = f0 * f0 + f1 * f1 + f2 * f2
         f0, f1, f2 = v10 - n10, v11 - n11, v12 - n12
         f += f0 * f0 + f1 * f1 + f2 * f2
-        f0, f1, f2 = v20 - n20, v21 - n21, v22 - n22
+        f0, f1, f2 = v20 - n20, v21 - n21, cb - n22
         f += f0 * f0 + f1 * f1 + f2 * f2
         f = sqrt(f / 8.0)
-        out.append((sqrt(dx * dx + dy * dy + dz * dz), 2.0 * asin(f if f < 1.0 else 1.0)))
+        out.append((dp, 2.0 * asin(f if f < 1.0 else 1.0)))
     return out
 
 
@@ -234,7 +252,7 @@ def solve_batch(
     whether each slot exists (N, 8) and whether the pose is degenerate (N,) (duplicates
     possible). ``ref`` (N, 6) the current OPW angles, or None."""
     N = len(M)
-    L, gamma, s5 = _constants(m)
+    (L, gamma), s5 = m.forearm, m.signs[4]
     a1, b, c1, c2 = m.a1, m.b, m.c1, m.c2
     R = M[:, :3, :3]
     px, py, pz = M[:, 0, 3], M[:, 1, 3], M[:, 2, 3]
