@@ -22,6 +22,7 @@ from scipy.spatial import cKDTree
 from workcell import limits
 from workcell.errors import GeometryError
 from workcell.modeller.entities import _target_counts
+from workcell.modeller.hashgroup import first_of_equal, has_repeat
 from workcell.modeller.meshprops import MassProperties, mass_properties, orient_consistently
 from workcell.spatial import det3
 
@@ -58,6 +59,7 @@ def merge_vertices(
     """Weld vertices closer than ``rel_tol`` x the mesh's largest extent; drop collapsed faces.
 
     Returns (vertices, faces, kept) where ``kept`` marks the input faces that survived.
+    Each output vertex is the first input vertex of its weld group, in input order.
 
     Rounds to a grid, then re-checks the few vertices that lie near a rounding boundary
     with a k-d tree, so two copies of one point are merged even when rounding splits them.
@@ -69,7 +71,7 @@ def merge_vertices(
     cols = [vertices[:, k] for k in range(3)]
     lo = [float(c.min()) for c in cols]
     cell = max(max(float(c.max()) - m for c, m in zip(cols, lo, strict=True)), 1e-12) * rel_tol
-    q = np.empty((3, n), dtype=np.int64)
+    q = np.empty((3, n), dtype=np.int64)  # grid cell of each vertex
     near_mask = np.zeros(n, dtype=bool)
     buf, r = np.empty(n), np.empty(n)
     for k in range(3):
@@ -80,22 +82,10 @@ def merge_vertices(
         buf -= r
         np.abs(buf, out=buf)
         near_mask |= buf > 0.499
-    key = q[0] * np.int64(73856093)
-    key ^= q[1] * np.int64(19349663)
-    key ^= q[2] * np.int64(83492791)
-    order = np.argsort(key)
-    ks = key[order]
-    new = np.empty(n, dtype=bool)
-    new[0] = True
-    np.not_equal(ks[1:], ks[:-1], out=new[1:])
-    inv = np.empty(n, dtype=np.int64)
-    inv[order] = np.cumsum(new) - 1
-    first = order[new]
-    qs = q[:, order]  # equal keys must mean equal cells; else a hash collision
-    same = ~new[1:]
-    if (qs[:, 1:][:, same] != qs[:, :-1][:, same]).any():
-        _, first, inv = np.unique(q.T, axis=0, return_index=True, return_inverse=True)
-        inv = inv.ravel()
+    label = first_of_equal(q)  # exact: equal cells, not equal hashes
+    new = label == np.arange(n)
+    first = np.flatnonzero(new)  # first occurrences, in input order
+    inv = (np.cumsum(new) - 1)[label]
     near = np.flatnonzero(near_mask)
     if len(near) > 1:  # a point near a rounding boundary may have a twin rounded the other way
         # pair the near-boundary points themselves: a cell's representative may lie up to
@@ -108,10 +98,13 @@ def merge_vertices(
                 (np.ones(int(split.sum())), (ga[split], gb[split])),
                 shape=(len(first), len(first)),
             )
-            _, label = connected_components(g, directed=False)
-            _, first_l, inv_l = np.unique(label, return_index=True, return_inverse=True)
-            first = first[first_l]
-            inv = inv_l[inv]
+            _, comp = connected_components(g, directed=False)
+            _, first_c, inv_c = np.unique(comp, return_index=True, return_inverse=True)
+            # number the merged vertices by their first occurrence again
+            rank = np.empty(len(first_c), dtype=np.int64)
+            rank[np.argsort(first_c)] = np.arange(len(first_c))
+            first = first[np.sort(first_c)]
+            inv = rank[inv_c.ravel()][inv]
     V = vertices[first]
     F = inv[faces]
     ok = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])
@@ -175,19 +168,20 @@ def _outward(V: NDArray[np.float64], F: NDArray[np.int64]) -> bool:
     if len(F) == 0:
         return True
     key = F * np.int64(len(V))
-    key += np.roll(F, -1, axis=1)  # directed edges (a, b) as a * nv + b
-    key = np.sort(key.ravel())
-    if (key[1:] == key[:-1]).any():
+    key[:, :2] += F[:, 1:]  # directed edges (a, b) as a * nv + b
+    key[:, 2] += F[:, 0]
+    if has_repeat(key.ravel()):
         return False
     # six times the signed volume, sum of a . (b x c) over faces, about the vertex mean;
-    # gathered column by column (row gathers of (M, 3) arrays are several times slower)
+    # gathered column by column (row gathers of (M, 3) arrays are several times slower);
+    # summed without BLAS: a threaded dot waits tens of ms for its threads on a busy machine
     x, y, z = (V[:, k] - V[:, k].mean() for k in range(3))
     i, j, k = (np.ascontiguousarray(F[:, c]) for c in range(3))
     yj, zj, yk, zk = y[j], z[j], y[k], z[k]
-    six_v = (
-        x[i] @ (yj * zk - zj * yk) + y[i] @ (zj * x[k] - x[j] * zk) + z[i] @ (x[j] * yk - yj * x[k])
-    )
-    return float(six_v) > 0
+    six = x[i] * (yj * zk - zj * yk)
+    six += y[i] * (zj * x[k] - x[j] * zk)
+    six += z[i] * (x[j] * yk - yj * x[k])
+    return float(six.sum()) > 0
 
 
 def _surface_arrays(e: _Entity) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
