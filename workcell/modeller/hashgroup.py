@@ -39,12 +39,12 @@ _SLOT_MUL = tuple(
 _ROW_MUL = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xC2B2AE3D27D4EB4F), np.uint64(0x165667B1))
 
 
-def _slots(h: NDArray[np.uint64], r: int) -> tuple[NDArray[np.intp], int]:
+def _slots(h: NDArray[np.uint64], r: int) -> tuple[NDArray[np.int64], int]:
     """Slots of hashes ``h`` in round ``r`` and the table size (a power of two >= 2 len(h))."""
     bits = max(len(h).bit_length() + 1, 4)
     s = h * _SLOT_MUL[r]
     s >>= np.uint64(64 - bits)
-    return s.astype(np.intp), 1 << bits
+    return s.view(np.int64), 1 << bits  # below 2**bits: the same values
 
 
 def _row_hash(cols: Sequence[NDArray[np.int64]]) -> NDArray[np.uint64]:
@@ -59,25 +59,28 @@ def first_of_equal(cols: Sequence[NDArray[np.int64]]) -> NDArray[np.intp]:
     smallest index ``j`` whose row equals row ``i`` exactly (so ``j <= i``, and ``j == i``
     marks the first occurrence of each distinct row)."""
     n = len(cols[0])
-    label = np.empty(n, dtype=np.intp)
-    todo = np.arange(n, dtype=np.intp)
-    h = _row_hash(cols)
+    todo = np.arange(n, dtype=np.intp)  # unsettled rows, ascending
+    label = todo.copy()
+    cur, h = list(cols), _row_hash(cols)
     for r in range(_ROUNDS):
-        if len(todo) == 0:
+        m = len(todo)
+        if m == 0:
             return label
         slot, size = _slots(h, r)
-        table = np.full(size, n, dtype=np.intp)
-        # the winner of a slot is its smallest index; a settled key's group then holds no
+        table = np.full(size, m, dtype=np.intp)
+        # the winner of a slot is its smallest index; a settled row's group then holds no
         # smaller index (all of the group wrote to this slot), so the winner is its first
-        np.minimum.at(table, slot, todo)
-        w = table[slot]
-        same = cols[0][w] == cols[0][todo]
-        for c in cols[1:]:
-            same &= c[w] == c[todo]
-        label[todo[same]] = w[same]
-        todo, h = todo[~same], h[~same]
+        np.minimum.at(table, slot, np.arange(m, dtype=np.intp))
+        w = table.take(slot)
+        same = cur[0].take(w) == cur[0]
+        for c in cur[1:]:
+            same &= c.take(w) == c
+        label[todo] = todo.take(w)  # final for settled rows, overwritten later for the rest
+        keep = np.flatnonzero(~same)
+        todo, h = todo.take(keep), h.take(keep)
+        cur = [c.take(keep) for c in cur]
     if len(todo):  # only after repeated full 64-bit hash collisions
-        rows = np.stack([c[todo] for c in cols], axis=1)
+        rows = np.stack(cur, axis=1)
         _, first, inv = np.unique(rows, axis=0, return_index=True, return_inverse=True)
         label[todo] = todo[first[inv.ravel()]]  # np.unique's first index is the smallest
     return label
@@ -85,8 +88,8 @@ def first_of_equal(cols: Sequence[NDArray[np.int64]]) -> NDArray[np.intp]:
 
 def has_repeat(keys: NDArray[np.int64]) -> bool:
     """True when some value occurs twice or more in ``keys`` (N,) int64 (exact)."""
-    k = keys
-    h = keys.view(np.uint64)
+    k = np.ascontiguousarray(keys)
+    h = k.view(np.uint64)
     for r in range(_ROUNDS):
         if len(k) < 2:
             return False
@@ -94,9 +97,10 @@ def has_repeat(keys: NDArray[np.int64]) -> bool:
         table = np.empty(size, dtype=np.intp)
         idx = np.arange(len(k), dtype=np.intp)
         table[slot] = idx  # any one writer wins the slot: equal keys settle on it together
-        w = table[slot]
+        w = table.take(slot)
         lost = w != idx
-        if (k[w[lost]] == k[lost]).any():
+        if (lost & (k.take(w) == k)).any():
             return True
-        k, h = k[lost], h[lost]
+        keep = np.flatnonzero(lost)
+        k, h = k.take(keep), h.take(keep)
     return bool(len(k) > 1 and (np.diff(np.sort(k)) == 0).any())

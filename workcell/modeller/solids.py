@@ -153,8 +153,10 @@ def _sphere_parts(
     patches, F = planar_patches(corners, names)
     # all placements at once: (n bands, 2 hemispheres, m slices, 4, 4); the lower hemisphere is
     # the reflection z -> -z (row 2 negated), the scaling multiplies rows 0-2 by (a, b, c)
-    up = np.matmul(Rz[None], F[:, None])
-    both = np.stack([up, up * np.array([1.0, 1.0, -1.0, 1.0])[:, None]], axis=1)
+    both = np.empty((n, 2, m, 4, 4))
+    np.matmul(Rz[None], F[:, None], out=both[:, 0])
+    both[:, 1] = both[:, 0]
+    both[:, 1, :, 2] *= -1.0
     both *= np.array([*radii, 1.0])[:, None]
     for j in range(n):
         surfaces[f"band{j}"] = patches[j]

@@ -106,9 +106,9 @@ def merge_vertices(
             first = first[np.sort(first_c)]
             inv = rank[inv_c.ravel()][inv]
     V = vertices[first]
-    F = inv[faces]
+    F = inv.take(faces)
     ok = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])
-    return V, F[ok], ok
+    return V, (F if ok.all() else F[ok]), ok
 
 
 def _place(
@@ -167,16 +167,18 @@ def _outward(V: NDArray[np.float64], F: NDArray[np.int64]) -> bool:
     """Fast test: no directed edge is used twice (consistent winding) and the volume is positive."""
     if len(F) == 0:
         return True
-    key = F * np.int64(len(V))
-    key[:, :2] += F[:, 1:]  # directed edges (a, b) as a * nv + b
-    key[:, 2] += F[:, 0]
-    if has_repeat(key.ravel()):
+    i, j, k = (np.ascontiguousarray(F[:, c]) for c in range(3))
+    m, nv = len(F), np.int64(len(V))
+    key = np.empty(3 * m, dtype=np.int64)  # directed edges (a, b) as a * nv + b
+    for part, (a, b) in enumerate(((i, j), (j, k), (k, i))):
+        np.multiply(a, nv, out=key[part * m : (part + 1) * m])
+        key[part * m : (part + 1) * m] += b
+    if has_repeat(key):
         return False
     # six times the signed volume, sum of a . (b x c) over faces, about the vertex mean;
     # gathered column by column (row gathers of (M, 3) arrays are several times slower);
     # summed without BLAS: a threaded dot waits tens of ms for its threads on a busy machine
-    x, y, z = (V[:, k] - V[:, k].mean() for k in range(3))
-    i, j, k = (np.ascontiguousarray(F[:, c]) for c in range(3))
+    x, y, z = (V[:, c] - V[:, c].mean() for c in range(3))
     yj, zj, yk, zk = y[j], z[j], y[k], z[k]
     six = x[i] * (yj * zk - zj * yk)
     six += y[i] * (zj * x[k] - x[j] * zk)
