@@ -10,6 +10,7 @@ or anything it is made of changes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import groupby
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -122,9 +123,16 @@ def _place(
     ``V`` is one vertex set (P, 3) shared by every copy, or one per copy (N, P, 3) with the
     same faces. ``flip`` (N,) marks the orientation-reversing transforms when known.
     """
-    R = Ts[:, None, :3, :3]  # written out: batched 3x3 matmul is slower for small matrices
-    Vw = V[..., 0, None] * R[..., 0] + V[..., 1, None] * R[..., 1] + V[..., 2, None] * R[..., 2]
-    Vw += Ts[:, None, :3, 3]
+    # written out per output coordinate (batched 3x3 matmul is slower for small matrices,
+    # and so are (..., 3)-shaped broadcasts, whose inner loops are three long)
+    Vw = np.empty((len(Ts), V.shape[-2], 3))
+    Vc = [V[..., k] for k in range(3)]
+    for c in range(3):
+        o = Vw[..., c]
+        np.multiply(Vc[0], Ts[:, c, 0, None], out=o)
+        o += Vc[1] * Ts[:, c, 1, None]
+        o += Vc[2] * Ts[:, c, 2, None]
+        o += Ts[:, c, 3, None]
     offs = (np.arange(len(Ts)) * V.shape[-2])[:, None, None]
     Fw = F + offs
     if flip is None:
@@ -147,11 +155,15 @@ def _group(
     """Group relations by target: (target, transforms, relation indices), in first-seen order."""
     if not targets:
         return []
+    # runs of one target (entities compare by identity), counted in C
+    runs = [(t, len(list(g))) for t, g in groupby(targets)]
+    if len({id(t) for t, _ in runs}) == len(runs):  # each target in one contiguous run
+        out, a = [], 0
+        for t, k in runs:
+            out.append((t, Ts[a : a + k], np.arange(a, a + k)))
+            a += k
+        return out
     ids = np.fromiter(map(id, targets), dtype=np.int64, count=len(targets))
-    cut = (np.flatnonzero(ids[1:] != ids[:-1]) + 1).tolist()
-    starts, ends = [0, *cut], [*cut, len(targets)]
-    if len({ids[a] for a in starts}) == len(starts):  # each target in one contiguous run
-        return [(targets[a], Ts[a:b], np.arange(a, b)) for a, b in zip(starts, ends, strict=True)]
     _, first, inv = np.unique(ids, return_index=True, return_inverse=True)
     order = np.argsort(inv, kind="stable")
     ends = np.cumsum(np.bincount(inv))
@@ -188,7 +200,9 @@ def _outward(V: NDArray[np.float64], F: NDArray[np.int64]) -> bool:
 
 def _surface_arrays(e: _Entity) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     V2, F = e.surface.triangulate()
-    return np.column_stack([V2, np.zeros(len(V2))]), F
+    V = np.zeros((len(V2), 3))
+    V[:, :2] = V2
+    return V, F
 
 
 def _block_arrays(e: _Entity) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
