@@ -123,16 +123,17 @@ def _place(
     ``V`` is one vertex set (P, 3) shared by every copy, or one per copy (N, P, 3) with the
     same faces. ``flip`` (N,) marks the orientation-reversing transforms when known.
     """
-    # written out per output coordinate (batched 3x3 matmul is slower for small matrices,
-    # and so are (..., 3)-shaped broadcasts, whose inner loops are three long)
+    # written out per output coordinate on (P, N) views, so that numpy's inner loops run
+    # over the N copies (batched 3x3 matmul is slower for small matrices, and so are
+    # broadcasts whose inner loops are three or P long)
     Vw = np.empty((len(Ts), V.shape[-2], 3))
-    Vc = [V[..., k] for k in range(3)]
+    Vc = [V[..., k].T if V.ndim == 3 else V[:, k, None] for k in range(3)]  # (P, N), (P, 1)
     for c in range(3):
-        o = Vw[..., c]
-        np.multiply(Vc[0], Ts[:, c, 0, None], out=o)
-        o += Vc[1] * Ts[:, c, 1, None]
-        o += Vc[2] * Ts[:, c, 2, None]
-        o += Ts[:, c, 3, None]
+        o = Vw[..., c].T
+        np.multiply(Vc[0], Ts[:, c, 0], out=o)
+        o += Vc[1] * Ts[:, c, 1]
+        o += Vc[2] * Ts[:, c, 2]
+        o += Ts[:, c, 3]
     offs = (np.arange(len(Ts)) * V.shape[-2])[:, None, None]
     Fw = F + offs
     if flip is None:
