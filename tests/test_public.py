@@ -17,6 +17,7 @@ MODULES = [
     "workcell",
     "workcell.errors",
     "workcell.spatial",
+    "workcell.spatial_checks",
     "workcell.files",
     "workcell.solids",
     "workcell.modeller.surface",
