@@ -133,6 +133,7 @@ MODULES = [
     "workcell.record.sheets",
     "workcell.record.rerun_log",
     "workcell.record.rr_scene",
+    "workcell.record.rr_frames",
     "workcell.record.rr_images",
     "workcell.record.cli_render",
     "workcell.examples.thesis_joints",
