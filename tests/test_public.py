@@ -47,6 +47,8 @@ MODULES = [
     "workcell.robots.ik_mink",
     "workcell.robots.ik_newton",
     "workcell.robots.mjcf",
+    "workcell.robots.mjcf_geoms",
+    "workcell.robots.mjcf_xml",
     "workcell.robots.chain",
     "workcell.robots.axes",
     "workcell.robots.opw",
