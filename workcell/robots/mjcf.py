@@ -56,10 +56,10 @@ from workcell.errors import GeometryError, ModelError
 from workcell.files import write_files
 from workcell.meshgeoms import MESHDIR, MeshAssets
 from workcell.robots.gripper import GripperPart
-from workcell.robots.mjcf_geoms import add_mesh, add_solid, pos_quat
+from workcell.robots.mjcf_geoms import add_mesh, add_solid
 from workcell.robots.mjcf_xml import spec_to_xml
 from workcell.robots.robot import Robot
-from workcell.spatial import invert
+from workcell.spatial import invert, pos_quat_from_pose
 
 __all__ = [
     "ARMATURE",
@@ -178,12 +178,12 @@ def robot_spec(
 
     bodies: list[tuple[str, int]] = []
     parent = spec.worldbody.add_body(name=body_name(prefix, 0))
-    parent.pos, parent.quat = pos_quat(robot.base)
+    parent.pos, parent.quat = pos_quat_from_pose(robot.base)
     fill(parent, 0)
     bodies.append((parent.name, 0))
     for i, j in enumerate(robot.joints):
         body = parent.add_body(name=body_name(prefix, i + 1))
-        body.pos, body.quat = pos_quat(j.origin)
+        body.pos, body.quat = pos_quat_from_pose(j.origin)
         kind = mujoco.mjtJoint.mjJNT_SLIDE if j.kind == "prismatic" else mujoco.mjtJoint.mjJNT_HINGE
         body.add_joint(
             name=joint_name(robot, prefix, i),
@@ -199,12 +199,12 @@ def robot_spec(
         parent = body
     n = robot.dof
     if gripper is None:
-        pos, quat = pos_quat(robot.tool)
+        pos, quat = pos_quat_from_pose(robot.tool)
         parent.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)
     else:
         gname = gripper_body_name(robot, prefix)
         gbody = parent.add_body(name=gname)
-        gbody.pos, gbody.quat = pos_quat(gripper.mount)
+        gbody.pos, gbody.quat = pos_quat_from_pose(gripper.mount)
         bodies.append((gname, n))
         palm = [add_part(gbody, p) for p in gripper.geometry if p.role == "palm"]
         if not any(palm):
@@ -228,7 +228,7 @@ def robot_spec(
             if not any(parts):
                 placeholder(fbody)
             bodies.append((fbody.name, n))
-        pos, quat = pos_quat(invert(gripper.mount) @ robot.tool)
+        pos, quat = pos_quat_from_pose(invert(gripper.mount) @ robot.tool)
         gbody.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)
     for a in range(len(bodies)):
         for b in range(a + 1, len(bodies)):

@@ -3,8 +3,7 @@
 :func:`add_solid` places a modeller solid (a block of ``robot.model``): one visual mesh geom
 that carries the mass and its convex collision geoms; :func:`add_mesh` places a mesh
 entry (of ``robot.geometry`` or of a gripper read from a file) with its own collision
-pieces. A placement that is not rigid is baked into the vertices. :func:`pos_quat` is a
-pose as MuJoCo's ``pos`` and ``quat`` (wxyz).
+pieces. A placement that is not rigid is baked into the vertices.
 """
 
 from __future__ import annotations
@@ -22,16 +21,12 @@ from workcell.meshgeoms import (
 )
 from workcell.robots.gripper import GripperPart
 from workcell.robots.robot import LinkGeometry, Robot
-from workcell.spatial import is_rigid, quat_from_matrix
+from workcell.spatial import is_rigid, pos_quat_from_pose
 
-__all__ = ["add_mesh", "add_solid", "pos_quat"]
+__all__ = ["add_mesh", "add_solid"]
 
 Array = NDArray[np.float64]
 _SHELL = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
-
-
-def pos_quat(T: Array) -> tuple[list[float], list[float]]:
-    return T[:3, 3].tolist(), quat_from_matrix(T[:3, :3]).tolist()
 
 
 def _placed_meshes(
@@ -68,7 +63,7 @@ def add_solid(
     """One visual geom (mass carrier) and the collision geoms of a solid, placed by T."""
     rgba = list(colour) if colour is not None else [0.7, 0.7, 0.72, 1.0]
     vis, col, P = _placed_meshes(robot, block, T, reg, cache)
-    pos, quat = pos_quat(P)
+    pos, quat = pos_quat_from_pose(P)
     gname = reg.unique(f"{reg.prefix}{block}")
     add_mesh_geoms(
         body,
@@ -104,7 +99,7 @@ def add_mesh(
     inertia = mass_inertia(mesh)
     vis = reg.add(name, mesh, _SHELL if inertia is None else inertia)
     col = collision_meshes(reg, name, pieces, False, vis) if pieces else []
-    pos, quat = pos_quat(T)
+    pos, quat = pos_quat_from_pose(T)
     gname = reg.unique(name)
     add_mesh_geoms(
         body, [(gname, vis)], col, collision_prefix=gname, pos=pos, quat=quat,
