@@ -74,7 +74,7 @@ from workcell.robots.mjcf import (
     robot_spec,
     spec_to_xml,
 )
-from workcell.spatial import pose_from_pos_quat, quat_from_matrix
+from workcell.spatial import pos_quat_from_pose, pose_from_pos_quat
 
 __all__ = [
     "DEFAULT_TIMESTEP",
@@ -127,10 +127,6 @@ class CompiledCell:
     assets: Mapping[str, bytes] = field(default_factory=dict)
 
 
-def _pos_quat(T: np.ndarray) -> tuple[list[float], list[float]]:
-    return T[:3, 3].tolist(), quat_from_matrix(T[:3, :3]).tolist()
-
-
 def _add_part_geoms(
     parent: mujoco.MjsBody,
     model: Model,
@@ -157,7 +153,7 @@ def _add_part_geoms(
     meshes = [reg.add(vis, mesh) for vis, _, mesh in visuals]
     col = collision_pieces(model, entity, concavity)
     cols = meshes if col.convex else collision_meshes(reg, name, col.pieces, False, meshes[0])
-    pos, quat = _pos_quat(pose)
+    pos, quat = pos_quat_from_pose(pose)
     add_mesh_geoms(
         parent,
         [(geom, mesh) for (_, geom, _), mesh in zip(visuals, meshes, strict=True)],
@@ -175,7 +171,7 @@ def _set_initial_q(child: mujoco.MjSpec, robot, q: np.ndarray) -> None:  # noqa:
     for i, jt in enumerate(robot.joints):
         body = child.body(body_name("", i + 1))
         T = pose_from_pos_quat(body.pos, body.quat) @ jt.motion(float(q[i]))
-        body.pos, body.quat = _pos_quat(T)
+        body.pos, body.quat = pos_quat_from_pose(T)
         child.joint(joint_name(robot, "", i)).ref = float(q[i])
 
 
@@ -223,7 +219,7 @@ def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
         )
     for p in cell.movable_parts.values():
         body = spec.worldbody.add_body(name=p.name)
-        body.pos, body.quat = _pos_quat(p.pose)
+        body.pos, body.quat = pos_quat_from_pose(p.pose)
         body.add_freejoint(name=f"{p.name}.free")
         _add_part_geoms(body, m, p.name, p.entity, p.colour, np.eye(4), p.density, reg, concavity)
         out.part_bodies[p.name] = p.name
@@ -232,7 +228,7 @@ def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
         prefix = f"{r.name}."
         child = robot_spec(r.robot, prefix="")
         link0 = child.body(body_name("", 0))
-        link0.pos, link0.quat = _pos_quat(r.world_base)
+        link0.pos, link0.quat = pos_quat_from_pose(r.world_base)
         _set_initial_q(child, r.robot, r.q)
         for file, data in child.assets.items():  # attach prefixes mesh file names too
             assets[f"{prefix}{file}"] = data
@@ -261,7 +257,7 @@ def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
             )
             out.welds[(rname, pname)] = ename
     for c in cell.cameras.values():
-        pos, quat = _pos_quat(c.pose())
+        pos, quat = pos_quat_from_pose(c.pose())
         spec.worldbody.add_camera(name=c.name, pos=pos, quat=quat, fovy=c.fovy)
         out.cameras[c.name] = c.name
     targets = {}  # each actuator's initial target: its joint's initial value

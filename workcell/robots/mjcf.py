@@ -14,7 +14,8 @@ Link solids (``robot.geometry``) become, per solid, one visual mesh geom (the ex
 mass and inertia are those of its exact meshes. A mesh entry (``LinkGeometry.mesh``, e.g.
 from a robot description's file) gives its mesh as the visual geom and its own convex
 ``collision`` pieces (else its hull; none when ``collides`` is False) as the collision
-geoms; an open mesh (a DAE surface) carries the mass of its convex hull, a flat one none.
+geoms; an open mesh (a DAE surface) carries the mass of its convex hull, a flat one none
+(:mod:`workcell.robots.mjcf_geoms`).
 A body without mass-carrying solids keeps a small placeholder inertia. A gripper read
 from a robot file has mesh parts, placed the same way. A gripper (``robot.gripper``) is a body ``{prefix}{gripper}`` fixed to
 the last link at its mount, with the palm, and two finger bodies on slide joints
@@ -39,36 +40,26 @@ critically damped servo of natural frequency :data:`SERVO_FREQUENCY`:
 (armature included) at q = 0.
 
 Mesh assets are binary STL files named ``{prefix}{block}.stl``, held in ``spec.assets``;
-:func:`export_robot` writes them beside the XML (``meshdir="meshes"``, relative).
+:func:`export_robot` writes them beside the XML (``meshdir="meshes"``, relative), at full
+precision (:func:`spec_to_xml`, :mod:`workcell.robots.mjcf_xml`).
 """
 
 from __future__ import annotations
 
-import ctypes
-import functools
 import os
-import warnings
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import mujoco
 import numpy as np
-from numpy.typing import NDArray
 
 from workcell.errors import GeometryError, ModelError
 from workcell.files import write_files
-from workcell.meshgeoms import (
-    MESHDIR,
-    MeshAssets,
-    add_mesh_geoms,
-    collision_meshes,
-    convex_pieces,
-    mass_inertia,
-)
+from workcell.meshgeoms import MESHDIR, MeshAssets
 from workcell.robots.gripper import GripperPart
-from workcell.robots.robot import LinkGeometry, Robot
-from workcell.spatial import invert, is_rigid, quat_from_matrix
+from workcell.robots.mjcf_geoms import add_mesh, add_solid
+from workcell.robots.mjcf_xml import spec_to_xml
+from workcell.robots.robot import Robot
+from workcell.spatial import invert, pos_quat_from_pose
 
 __all__ = [
     "ARMATURE",
@@ -92,9 +83,6 @@ ARMATURE = 0.02  # kg m^2 (revolute) or kg (prismatic): a small geared motor's r
 SERVO_FREQUENCY = 15.0  # Hz: natural frequency of each joint's position servo
 SERVO_DAMPING = 1.0  # damping ratio of each joint's position servo
 
-Array = NDArray[np.float64]
-_SHELL = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
-
 
 def body_name(prefix: str, i: int) -> str:
     """Name of link i's body (0 = base)."""
@@ -117,89 +105,6 @@ def finger_joint_names(robot: Robot, prefix: str = "") -> tuple[str, str]:
     """Names of the left and right finger slide joints (q in m, 0 = closed)."""
     g = gripper_body_name(robot, prefix)
     return f"{g}.left_slide", f"{g}.right_slide"
-
-
-def _pos_quat(T: Array) -> tuple[list[float], list[float]]:
-    return T[:3, 3].tolist(), quat_from_matrix(T[:3, :3]).tolist()
-
-
-def _placed_meshes(
-    robot: Robot, block: str, T: Array, reg: MeshAssets, cache: dict[str, tuple[str, list[str]]]
-) -> tuple[str, list[str], Array]:
-    """(visual mesh, collision meshes, geom pose) of ``block`` placed by T in a body."""
-    model = robot.model
-    if is_rigid(T):
-        if block not in cache:
-            pieces, convex = convex_pieces(model, block)
-            vis = reg.add(f"{reg.prefix}{block}", model.world_mesh(("block", block)))
-            cache[block] = (vis, collision_meshes(reg, f"{reg.prefix}{block}", pieces, convex, vis))
-        vis, col = cache[block]
-        return vis, col, T
-    # a scaled, sheared or mirrored placement is baked into new vertices (geom poses are
-    # rigid); trimesh re-winds the faces of a mirrored mesh itself
-    m = model.world_mesh(("block", block)).copy().apply_transform(T)
-    vis = reg.add(f"{reg.prefix}{block}.placed", m)
-    pieces, convex = convex_pieces(model, block)
-    placed = [p.copy().apply_transform(T).convex_hull for p in pieces]
-    return vis, collision_meshes(reg, f"{reg.prefix}{block}.placed", placed, convex, vis), np.eye(4)
-
-
-def _add_solid(
-    body: mujoco.MjsBody,
-    robot: Robot,
-    block: str,
-    T: Array,
-    colour: tuple[float, ...] | None,
-    density: float,
-    reg: MeshAssets,
-    cache: dict[str, tuple[str, list[str]]],
-) -> None:
-    """One visual geom (mass carrier) and the collision geoms of a solid, placed by T."""
-    rgba = list(colour) if colour is not None else [0.7, 0.7, 0.72, 1.0]
-    vis, col, P = _placed_meshes(robot, block, T, reg, cache)
-    pos, quat = _pos_quat(P)
-    gname = reg.unique(f"{reg.prefix}{block}")
-    add_mesh_geoms(
-        body,
-        [(gname, vis)],
-        col,
-        collision_prefix=gname,
-        pos=pos,
-        quat=quat,
-        density=density,
-        rgba=rgba,
-    )
-
-
-def _add_mesh(
-    body: mujoco.MjsBody,
-    name: str,
-    g: LinkGeometry | GripperPart,
-    density: float,
-    reg: MeshAssets,
-) -> bool:
-    """A mesh entry (of ``robot.geometry`` or of a gripper read from a file): its visual
-    mesh and its convex collision pieces (or its hull; none when ``g.collides`` is
-    False), placed by ``g.transform`` (baked in when not rigid). The visual mesh carries
-    the mass at ``density``: exactly when it is closed, from its hull when it is open (a
-    DAE surface; :func:`~workcell.meshgeoms.mass_inertia`), not at all when flat. Returns
-    whether it carries mass."""
-    rgba = list(g.colour) if g.colour is not None else [0.7, 0.7, 0.72, 1.0]
-    pieces = (list(g.collision) or [g.mesh.convex_hull]) if g.collides else []
-    T, mesh = g.transform, g.mesh
-    if not is_rigid(T):
-        mesh, T = g.mesh.copy().apply_transform(T), np.eye(4)
-        pieces = [p.copy().apply_transform(g.transform).convex_hull for p in pieces]
-    inertia = mass_inertia(mesh)
-    vis = reg.add(name, mesh, _SHELL if inertia is None else inertia)
-    col = collision_meshes(reg, name, pieces, False, vis) if pieces else []
-    pos, quat = _pos_quat(T)
-    gname = reg.unique(name)
-    add_mesh_geoms(
-        body, [(gname, vis)], col, collision_prefix=gname, pos=pos, quat=quat,
-        density=density if inertia is not None else 0.0, rgba=rgba,
-    )  # fmt: skip
-    return inertia is not None
 
 
 def _check_prefix(prefix: str) -> None:
@@ -258,27 +163,27 @@ def robot_spec(
         massive = False
         for g in mine:
             if g.mesh is not None:
-                massive |= _add_mesh(body, f"{prefix}link{k}.mesh", g, density, reg)
+                massive |= add_mesh(body, f"{prefix}link{k}.mesh", g, density, reg)
             else:
-                _add_solid(body, robot, g.block, g.transform, g.colour, density, reg, cache)
+                add_solid(body, robot, g.block, g.transform, g.colour, density, reg, cache)
                 massive = True
         if not massive:
             placeholder(body)
 
     def add_part(body: mujoco.MjsBody, p: GripperPart) -> bool:
         if p.mesh is not None:
-            return _add_mesh(body, f"{body.name}.mesh", p, density, reg)
-        _add_solid(body, robot, p.block, p.transform, p.colour, density, reg, cache)
+            return add_mesh(body, f"{body.name}.mesh", p, density, reg)
+        add_solid(body, robot, p.block, p.transform, p.colour, density, reg, cache)
         return True
 
     bodies: list[tuple[str, int]] = []
     parent = spec.worldbody.add_body(name=body_name(prefix, 0))
-    parent.pos, parent.quat = _pos_quat(robot.base)
+    parent.pos, parent.quat = pos_quat_from_pose(robot.base)
     fill(parent, 0)
     bodies.append((parent.name, 0))
     for i, j in enumerate(robot.joints):
         body = parent.add_body(name=body_name(prefix, i + 1))
-        body.pos, body.quat = _pos_quat(j.origin)
+        body.pos, body.quat = pos_quat_from_pose(j.origin)
         kind = mujoco.mjtJoint.mjJNT_SLIDE if j.kind == "prismatic" else mujoco.mjtJoint.mjJNT_HINGE
         body.add_joint(
             name=joint_name(robot, prefix, i),
@@ -294,12 +199,12 @@ def robot_spec(
         parent = body
     n = robot.dof
     if gripper is None:
-        pos, quat = _pos_quat(robot.tool)
+        pos, quat = pos_quat_from_pose(robot.tool)
         parent.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)
     else:
         gname = gripper_body_name(robot, prefix)
         gbody = parent.add_body(name=gname)
-        gbody.pos, gbody.quat = _pos_quat(gripper.mount)
+        gbody.pos, gbody.quat = pos_quat_from_pose(gripper.mount)
         bodies.append((gname, n))
         palm = [add_part(gbody, p) for p in gripper.geometry if p.role == "palm"]
         if not any(palm):
@@ -323,7 +228,7 @@ def robot_spec(
             if not any(parts):
                 placeholder(fbody)
             bodies.append((fbody.name, n))
-        pos, quat = _pos_quat(invert(gripper.mount) @ robot.tool)
+        pos, quat = pos_quat_from_pose(invert(gripper.mount) @ robot.tool)
         gbody.add_site(name=f"{prefix}{TOOL_SITE}", pos=pos, quat=quat)
     for a in range(len(bodies)):
         for b in range(a + 1, len(bodies)):
@@ -358,67 +263,6 @@ def _add_servos(spec: mujoco.MjSpec, frequency: float) -> None:
 def kinematic_model(robot: Robot, *, prefix: str = "") -> mujoco.MjModel:
     """Compiled kinematic-only model of the robot (placeholder inertias, no geometry)."""
     return robot_spec(robot, prefix=prefix, geometry=False, actuators=False).compile()
-
-
-@functools.cache
-def _xml_format_hooks() -> tuple[ctypes._CFuncPtr, ctypes._CFuncPtr] | None:
-    """MuJoCo's (get, set) hooks of its XML significant digits; None when unusable.
-
-    mujoco 3.17 exports ``int _mjPRIVATE__get_xml_precision()`` and
-    ``void _mjPRIVATE__set_xml_precision(int)`` (a thread-local digit count, default 6);
-    other releases differ (some take a printf format), so the hooks are used only on
-    3.17 and only when the current value looks like a digit count.
-    """
-    if not mujoco.__version__.startswith("3.17."):
-        return None
-    here = Path(mujoco.__file__).parent
-    for pattern in ("libmujoco.so*", "libmujoco*.dylib", "mujoco.dll"):
-        for path in sorted(here.glob(pattern)):
-            try:
-                lib = ctypes.CDLL(str(path))
-                get, put = lib._mjPRIVATE__get_xml_precision, lib._mjPRIVATE__set_xml_precision
-            except (OSError, AttributeError):
-                continue
-            get.restype, get.argtypes = ctypes.c_int, []
-            put.restype, put.argtypes = None, [ctypes.c_int]
-            return (get, put) if 0 < get() <= 30 else None
-    return None
-
-
-@contextmanager
-def _full_precision() -> Iterator[None]:
-    """Make MuJoCo's XML writer print 17 significant digits (its default prints 6).
-
-    The setting is thread-local in MuJoCo: set, used and restored in the calling thread.
-    """
-    hooks = _xml_format_hooks()
-    if hooks is None:
-        warnings.warn(
-            "MuJoCo's XML number precision cannot be set in this release: the saved XML "
-            "has 6 significant digits (tool poses off by ~1e-7 m)",
-            stacklevel=3,
-        )
-        yield
-        return
-    get, put = hooks
-    old = get()
-    put(17)
-    try:
-        yield
-    finally:
-        put(old)
-
-
-def spec_to_xml(spec: mujoco.MjSpec) -> str:
-    """MJCF text of ``spec`` with every number at full double precision.
-
-    MuJoCo's writer prints 6 significant digits by default, which moves a saved robot's
-    tool by ~1e-7 m; this switches it to 17 for the call (through the library's exported
-    XML-precision hook, a private symbol of mujoco 3.17; elsewhere it warns and keeps 6). Raises ValueError as
-    ``spec.to_xml`` does when the spec does not compile.
-    """
-    with _full_precision():
-        return spec.to_xml()
 
 
 def export_robot(

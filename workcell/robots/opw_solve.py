@@ -271,7 +271,7 @@ def solve_batch(
     u = x - a1
     v = (pz - c1)[:, None]
     rho = np.hypot(u, v)
-    ck = (u * u + v * v - c2 * c2 - L * L) / (2.0 * c2 * L)
+    ck = (u * u + v * v - (c2 * c2 + L * L)) / (2.0 * c2 * L)  # as the single-pose path
     ok = (rho <= c2 + L + REACH_TOL) & (rho >= abs(c2 - L) - REACH_TOL) & ~inside[:, None]
     kappa = np.arccos(np.clip(ck, -1.0, 1.0))
     d = np.where(up == (u >= 0.0), kappa, -kappa)
