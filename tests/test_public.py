@@ -24,6 +24,7 @@ MODULES = [
     "workcell.modeller.model",
     "workcell.modeller.meshprops",
     "workcell.modeller.world",
+    "workcell.modeller.hashgroup",
     "workcell.modeller.storage",
     "workcell.modeller.solids",
     "workcell.modeller.sweeps",
