@@ -31,6 +31,7 @@ __all__ = [
     "ALIGNED_TOL",
     "REACH_TOL",
     "SINGULAR_TOL",
+    "beside_axis1",
     "letters",
     "pose_errors",
     "solve_batch",
@@ -61,6 +62,27 @@ def _unreachable(m: OPWModel, rho: float, far: bool) -> str:
     )
 
 
+def beside_axis1(
+    px: float, py: float, offset: float, point: str, name: str
+) -> tuple[float, float, str]:
+    """A wrist point (px, py, m) against the cylinder of radius |offset| (m) about axis 1
+    that the arm cannot enter: (squared distance from axis 1, the point's distance along
+    a tangent of the cylinder, sqrt(r2 - offset^2) (0 on it), "" or why it is out of reach).
+    ``point`` and ``name`` word the reason (the point's and the offset's names)."""
+    r2 = px * px + py * py
+    h2 = r2 - offset * offset
+    if h2 < -2.0 * abs(offset) * REACH_TOL:
+        return (
+            r2,
+            0.0,
+            (
+                f"out of reach: the {point} is {math.sqrt(r2):.4g} m from axis 1, inside the "
+                f"cylinder of radius |{name}| = {abs(offset):.4g} m the arm cannot enter"
+            ),
+        )
+    return r2, (math.sqrt(h2) if h2 > 0.0 else 0.0), ""
+
+
 def solve_one(
     m: OPWModel, M: list[list[float]], ref: tuple[float, ...] | None
 ) -> tuple[list[Solution], bool, str]:
@@ -73,18 +95,9 @@ def solve_one(
     a1, b, c1, c2 = m.a1, m.b, m.c1, m.c2
     (L, gamma), s5 = m.forearm, m.signs[4]
     cos, sin, atan2, sqrt = math.cos, math.sin, math.atan2, math.sqrt
-    r2 = px * px + py * py
-    xs2 = r2 - b * b
-    if xs2 < -2.0 * abs(b) * REACH_TOL:
-        return (
-            [],
-            False,
-            (
-                f"out of reach: the wrist centre is {sqrt(r2):.4g} m from axis 1, inside the "
-                f"cylinder of radius |b| = {abs(b):.4g} m the arm cannot enter"
-            ),
-        )
-    xs = sqrt(xs2) if xs2 > 0.0 else 0.0
+    r2, xs, why = beside_axis1(px, py, b, "wrist centre", "b")
+    if why:
+        return [], False, why
     shoulder_free = r2 < REACH_TOL * REACH_TOL
     t1_ref, t4_ref = (ref[0], ref[3]) if ref is not None else (0.0, 0.0)
     phi = t1_ref if shoulder_free else atan2(py, px)

@@ -27,7 +27,13 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from workcell.robots.opw_solve import ALIGNED_TOL, DEGENERATE, REACH_TOL, SINGULAR_TOL
+from workcell.robots.opw_solve import (
+    ALIGNED_TOL,
+    DEGENERATE,
+    REACH_TOL,
+    SINGULAR_TOL,
+    beside_axis1,
+)
 from workcell.robots.ur import URModel
 
 __all__ = ["letters", "pose_errors", "solve_batch", "solve_one"]
@@ -55,18 +61,9 @@ def solve_one(
     (r00, r01, r02, px), (r10, r11, r12, py), (r20, r21, r22, pz) = M
     d1, a2, a3, d4, d5, f, st = m.d1, m.a2, m.a3, m.d4, m.d5, m.forward, m.straight
     cos, sin, atan2, sqrt = math.cos, math.sin, math.atan2, math.sqrt
-    r2 = px * px + py * py
-    h2 = r2 - d4 * d4
-    if h2 < -2.0 * abs(d4) * REACH_TOL:
-        return (
-            [],
-            False,
-            (
-                f"out of reach: the wrist is {sqrt(r2):.4g} m from axis 1, inside the cylinder "
-                f"of radius |d4| = {abs(d4):.4g} m the arm cannot enter"
-            ),
-        )
-    hs = sqrt(h2) if h2 > 0.0 else 0.0
+    r2, hs, why = beside_axis1(px, py, d4, "wrist", "d4")
+    if why:
+        return [], False, why
     free = r2 < REACH_TOL * REACH_TOL
     psi = ref[0] if free and ref is not None else (0.0 if free else atan2(py, px))
     shoulder = free or hs < SINGULAR_TOL * max(sqrt(r2), 1e-300)
