@@ -21,7 +21,7 @@ from workcell import spatial
 from workcell.robots import Joint, Robot, get, library
 from workcell.robots.axes import axis_lines
 from workcell.robots.chain import joints_from_table
-from workcell.robots.ik_closed import CONFIGS, config_of, family_model, ik_all, ik_batch
+from workcell.robots.ik_closed import CONFIGS, config_of, family_model, ik_all, ik_batch, ik_report
 from workcell.robots.models import abb_irb140
 
 TWO_PI = 2 * np.pi
@@ -341,3 +341,13 @@ def test_a_stretched_elbow_is_flagged_singular():
     assert 1 <= len(mine) <= 2
     assert all(s.singular and s.success for s in mine)
     assert not any(s.singular for s in sols if s.config[0] != mine[0].config[0])
+
+
+def test_a_wrist_inside_the_shoulder_offset_cylinder_is_out_of_reach():
+    """A UR wrist point on axis 1 lies inside the cylinder of radius d4 (UR5e: 0.1333 m,
+    UR's published DH) that the arm cannot enter: no solution, and the reason says so."""
+    T = np.eye(4)
+    T[:3, 3] = (0.0, 0.0, 0.4)
+    sols, reason = ik_report(get("ur5e", geometry=False), T, None)
+    assert sols == []
+    assert "inside the cylinder of radius |d4| = 0.1333 m" in reason
