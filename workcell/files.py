@@ -10,14 +10,15 @@ file-system failure (missing folder, not a folder, permission, read-only, name t
 disk full) becomes the caller's :class:`~workcell.errors.WorkcellError` subclass naming
 the path; :func:`check_writable` runs the same checks before expensive work starts.
 
-Reading (:func:`read_bytes`, :func:`read_text`, :func:`load_json`): bounded by the
-``max_file_bytes`` limit (:mod:`workcell.limits`; ``/dev/zero`` stops there), and a file
-that does not parse gives the caller's error class without echoing the file's content.
+Reading (:func:`read_bytes`, :func:`read_text`, :func:`load_json`): regular files only
+(a folder, a FIFO, a socket or a device is refused before anything opens it, and the
+open cannot block: a file swapped in between is caught after the open), bounded by the
+``max_file_bytes`` limit (:mod:`workcell.limits`), confined to the root folder in force
+(:mod:`workcell.confine`), and a file that does not parse gives the caller's error class
+without echoing the file's content.
 
-Confinement (:func:`resolve_inside`, :func:`leaves_root`): a file name taken relative to a
-root folder, refused when it could lead outside it (absolute, ``~``, ``..``, hidden names,
-symbolic links, and regular files with more than one hard link: a hard link planted in the
-root may be the same file as one anywhere else on the file system).
+Confinement (:func:`resolve_inside`, :func:`leaves_root`) lives in :mod:`workcell.confine`
+(re-exported here).
 """
 
 from __future__ import annotations
@@ -35,7 +36,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from workcell import limits
+from workcell import confine, limits
+from workcell.confine import leaves_root, resolve_inside
 from workcell.errors import WorkcellError
 
 __all__ = [
@@ -308,24 +310,48 @@ def write_files(
 
 # ------------------------------------------------------------------ reading
 def read_bytes(
-    path: str | os.PathLike, *, what: str = "file", error: Error = WorkcellError
+    path: str | os.PathLike,
+    *,
+    what: str = "file",
+    error: Error = WorkcellError,
+    root: str | os.PathLike | None = None,
 ) -> bytes:
-    """The bytes of ``path``, at most ``max_file_bytes`` (:mod:`workcell.limits`): a larger
-    file raises LimitError (a device such as /dev/zero stops at the limit); ``error`` for
-    a file that cannot be read, a folder, a FIFO or a socket."""
+    """The bytes of regular file ``path``, at most ``max_file_bytes`` (:mod:`workcell.limits`).
+
+    ``root`` (default: the root of :func:`workcell.confine.confined` in force, if any):
+    the file must lie inside it (checked on the name before anything is opened, with a
+    message that never tells whether a file outside exists, and again on the file
+    opened). A folder, FIFO, socket or device is refused (``error``) before it is opened;
+    the open never blocks (``O_NONBLOCK``) and the file opened is checked again (a FIFO
+    swapped in between is refused, not waited on). A larger file raises LimitError before
+    it is read; ``error`` for a file that cannot be read.
+    """
     bound = limits.current().max_file_bytes
+    root = confine.current_root() if root is None else root
+    name = os.fspath(path)
+    if root is not None:
+        why = leaves_root(name, root)
+        if why is not None:
+            raise error(f"cannot read {what} '{path}': {why}")
     try:
-        fd = os.open(os.fspath(path), os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+        st = os.stat(name)
+    except (OSError, ValueError) as exc:
+        why = _reason(exc) if isinstance(exc, OSError) else "the name holds a NUL character"
+        raise error(f"cannot read {what} '{path}': {why}") from None
+    _regular(st, path, what, error)
+    limits.check("max_file_bytes", st.st_size, f"{what} '{path}'")
+    try:
+        fd = os.open(name, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
     except OSError as exc:
         raise error(f"cannot read {what} '{path}': {_reason(exc)}") from exc
     try:
         st = os.fstat(fd)
-        if stat.S_ISDIR(st.st_mode):
-            raise error(f"cannot read {what} '{path}': it is a folder")
-        if not (stat.S_ISREG(st.st_mode) or stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode)):
-            raise error(f"cannot read {what} '{path}': it is {_kind(st.st_mode)}")
-        if stat.S_ISREG(st.st_mode):
-            limits.check("max_file_bytes", st.st_size, f"{what} '{path}'")
+        _regular(st, path, what, error)
+        if root is not None:
+            why = confine.opened_leaves_root(fd, name, root)
+            if why is not None:
+                raise error(f"cannot read {what} '{path}': {why}")
+        limits.check("max_file_bytes", st.st_size, f"{what} '{path}'")
         with os.fdopen(os.dup(fd), "rb") as f:
             data = f.read(bound + 1)
     except OSError as exc:
@@ -334,6 +360,14 @@ def read_bytes(
         os.close(fd)
     limits.check("max_file_bytes", len(data), f"{what} '{path}' (read stopped there)")
     return data
+
+
+def _regular(st: os.stat_result, path: object, what: str, error: Error) -> None:
+    """``error`` unless ``st`` is a regular file's."""
+    if stat.S_ISREG(st.st_mode):
+        return
+    kind = "a folder" if stat.S_ISDIR(st.st_mode) else _kind(st.st_mode)
+    raise error(f"cannot read {what} '{path}': it is {kind}, not a regular file")
 
 
 def read_text(path: str | os.PathLike, *, what: str = "file", error: Error = WorkcellError) -> str:
@@ -363,57 +397,3 @@ def load_json(path: str | os.PathLike, *, what: str = "file", error: Error = Wor
         msg = str(exc)
         why = "an integer has more than 4300 digits" if "digits" in msg else msg.split(";")[0]
         raise error(f"{where} is not valid JSON: {why}") from None
-
-
-# ------------------------------------------------------------------ confinement
-def resolve_inside(root: str | os.PathLike, name: object, *, error: Error = WorkcellError) -> Path:
-    """The file ``name`` (relative) inside folder ``root``, symbolic links resolved.
-
-    Refused (``error``): a name that is not a non-empty string, absolute paths, ``~``,
-    ``..``, hidden names (a part starting with '.'), NUL characters, and anything that
-    resolves outside ``root`` through a symbolic link. The message is the same whether
-    or not the file exists.
-    """
-    if not isinstance(name, str) or not name.strip():
-        raise error(f"a file name must be a non-empty string, got {name!r}")
-    rule = (
-        "file names are relative to the server's root folder: no absolute paths, '~', "
-        "'..' or hidden ('.') names"
-    )
-    parts = Path(name).parts
-    if (
-        "\x00" in name
-        or os.path.isabs(name)
-        or name.startswith("~")
-        or any(part == ".." or part.startswith(".") for part in parts)
-    ):
-        raise error(f"file name {name!r} refused: {rule}")
-    full = os.path.realpath(os.path.join(os.path.realpath(os.fspath(root)), name))
-    why = leaves_root(full, root)
-    if why is not None:
-        raise error(f"file name {name!r} refused: {why}")
-    return Path(full)
-
-
-def leaves_root(path: str | os.PathLike, root: str | os.PathLike) -> str | None:
-    """Why ``path`` may lead outside the folder ``root`` (None: it does not).
-
-    ``path`` resolved through symbolic links must lie inside ``root`` (resolved too); an
-    existing regular file must have one hard link only (another name of the same file
-    may lie anywhere on the file system, and nothing tells where). The reasons never
-    say whether a file outside the root exists.
-    """
-    real_root = os.path.realpath(os.fspath(root))
-    full = os.path.realpath(os.fspath(path))
-    if os.path.commonpath([full, real_root]) != real_root:
-        return "it leads outside the root folder"
-    try:
-        st = os.stat(full)
-    except OSError:
-        return None  # not there (yet): reading it fails later, writing it creates it
-    if stat.S_ISREG(st.st_mode) and st.st_nlink > 1:
-        return (
-            f"it is a file with {st.st_nlink} hard links, which may lead outside the "
-            "root folder; copy the file into the root instead"
-        )
-    return None

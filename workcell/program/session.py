@@ -17,8 +17,8 @@ import threading
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from workcell.confine import confined, resolve_inside
 from workcell.errors import ProgramError, WorkcellError
-from workcell.files import resolve_inside
 from workcell.modeller.model import Model
 
 if TYPE_CHECKING:
@@ -122,8 +122,10 @@ class Session:
         return p if p.is_absolute() else self.base_dir / p
 
     def execute(self, command: Command) -> Any:
-        """Run one command under the session's lock and return its result."""
-        with self.lock:
+        """Run one command under the session's lock and return its result; with a
+        ``root``, every file the command reads must lie inside it
+        (:func:`workcell.confine.confined`)."""
+        with self.lock, confined(self.root):
             return command.execute(self)
 
     # ------------------------------------------------------------------ names (completion)

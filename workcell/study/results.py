@@ -31,7 +31,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from workcell.errors import StudyError
-from workcell.files import atomic_path, atomic_write_text
+from workcell.files import atomic_path, atomic_write_text, read_text
 from workcell.study.evaluation import RESULT_COLUMNS
 from workcell.study.spec import Parameter
 
@@ -97,8 +97,8 @@ class ResultStore:
         study = out / STUDY_FILE
         if study.exists():
             try:
-                old = json.loads(study.read_text(encoding="utf-8"))
-            except (OSError, ValueError) as exc:
+                old = json.loads(read_text(study, what="study file", error=StudyError))
+            except (StudyError, ValueError) as exc:
                 raise StudyError(f"'{study}' is damaged ({exc}); use another folder") from exc
             if old.get("key") != key:
                 differ = sorted(k for k in info if old.get("study", {}).get(k) != info[k])
