@@ -402,6 +402,7 @@ def test_the_security_section_states_what_the_code_does():
         f"| listen backlog | {Server.request_queue_size} |",
         f"| connections served at once | {srv_module.MAX_CONNECTIONS} (`--max-connections N`) |",
         f"| time to complete the hello | {srv_module.HELLO_TIMEOUT:g} s |",
+        f"| connections waiting for their hello | {srv_module.MAX_WAITING} |",
         f"{srv_module.IDLE_TIMEOUT:g} s (`--idle-timeout S`)",
         f"answered ever later ({srv_module.BAD_TOKEN_DELAY:g} s, then",
         f"{MAX_MESSAGE_BYTES:,} bytes",

@@ -84,6 +84,11 @@ def decode_request(line: bytes) -> Request:
         msg = json.loads(text)
     except json.JSONDecodeError as exc:
         raise ProtocolError(f"malformed JSON at character {exc.pos + 1}: {exc.msg}") from exc
+    except RecursionError:
+        raise ProtocolError("malformed JSON: arrays or objects nested too deeply") from None
+    except ValueError as exc:  # an integer of more than 4300 digits
+        why = "an integer has more than 4300 digits" if "digits" in str(exc) else "a bad value"
+        raise ProtocolError(f"malformed JSON: {why}") from None
     if not isinstance(msg, dict):
         raise ProtocolError(
             f'a request is a JSON object {{"id", "command", "args"}}, got {type(msg).__name__}'
@@ -94,7 +99,9 @@ def decode_request(line: bytes) -> Request:
     version = msg.get("version", VERSION)
     if version != VERSION:
         raise _with_id(
-            ProtocolError(f"protocol version {version!r} unknown; this server speaks {VERSION}"),
+            ProtocolError(
+                f"protocol version {_short(version)} unknown; this server speaks {VERSION}"
+            ),
             rid,
         )
     command = msg.get("command")
@@ -108,6 +115,16 @@ def decode_request(line: bytes) -> Request:
             ProtocolError('"args" must be an object (by name) or an array (in order)'), rid
         )
     return Request(rid, command, args)
+
+
+def _short(v: Any) -> str:
+    """``repr(v)``, at most 40 characters (a reply never echoes a client's long value)."""
+    r = (
+        repr(v)
+        if not isinstance(v, int) or abs(v) < 10**30
+        else f"a {len(str(abs(v)))}-digit number"
+    )
+    return r if len(r) <= 40 else r[:37] + "..."
 
 
 def _with_id(exc: ProtocolError, rid: Any) -> ProtocolError:

@@ -114,8 +114,9 @@ class Throttle:
         self._lock = threading.Lock()
         self._state: dict[str, tuple[int, float]] = {}  # address -> (failures, next answer)
 
-    def failed(self, addr: str) -> float:
-        """Sleep as long as this failure earns; return the seconds slept."""
+    def failed(self, addr: str, cancel: threading.Event | None = None) -> float:
+        """Sleep as long as this failure earns (or until ``cancel`` is set: the
+        connection was closed meanwhile); return the seconds waited."""
         with self._lock:
             n, ready = self._state.get(addr, (0, 0.0))
             now = time.monotonic()
@@ -123,7 +124,7 @@ class Throttle:
             self._state[addr] = (n + 1, ready)
         wait = ready - now
         if wait > 0:
-            time.sleep(wait)
+            (cancel or threading.Event()).wait(wait)
         return wait
 
     def succeeded(self, addr: str) -> None:
