@@ -18,6 +18,16 @@ limit                       default        what it bounds
 ``max_file_bytes``          256 MiB        a model, cell or script file read
 ``max_coordinate``          1e6 m          any coordinate, length or translation given, and
                                            any entry of a transform's 3x3 part
+``max_path_samples``        100,000        poses one Cartesian command solves IK for (a line
+                                           or arc at a tiny step; ~40 us and ~1.3 KB each)
+``max_candidates``          1,000,000      candidates of one study (a grid or a sample)
+``max_workers``             64             worker processes one study starts on this machine
+``max_images``              100,000        pictures one command renders (video frames,
+                                           recorded images, contact-sheet tiles; ~10 ms each)
+``max_pixels``              50,000,000     pixels of one picture (a contact sheet whole;
+                                           3 bytes each: 150 MB)
+``max_line_chars``          65,536         characters of one command-language line (the
+                                           parser takes ~5 us each)
 ==========================  =============  ==================================================
 
 Raise (or lower) them for a block of code, in this thread only::
@@ -74,6 +84,12 @@ class Limits:
     max_sim_time: float = _limit(1e7, "s", "the simulated clock")
     max_file_bytes: int = _limit(256 << 20, "bytes", "a file read (model, cell, script)")
     max_coordinate: float = _limit(1e6, "m", "a coordinate, length or transform entry")
+    max_path_samples: int = _limit(100_000, "samples", "IK samples of one Cartesian command")
+    max_candidates: int = _limit(1_000_000, "candidates", "candidates of one study")
+    max_workers: int = _limit(64, "workers", "worker processes one study starts here")
+    max_images: int = _limit(100_000, "pictures", "pictures rendered by one command")
+    max_pixels: int = _limit(50_000_000, "pixels", "pixels of one picture")
+    max_line_chars: int = _limit(65_536, "characters", "one command-language line")
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):

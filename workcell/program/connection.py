@@ -27,8 +27,10 @@ from workcell.program.base import COMMANDS, command_class
 from workcell.program.protocol import (
     MAX_MESSAGE_BYTES,
     VERSION,
+    ReplyTooLargeError,
     decode_request,
     encode,
+    encode_bounded,
     error_reply,
     error_type,
     to_jsonable,
@@ -200,16 +202,12 @@ class Connection(socketserver.StreamRequestHandler):
     def _send(self, message: dict[str, Any]) -> None:
         rid = message.get("id")
         try:
-            data = encode(message)
-        except (ProtocolError, ValueError, TypeError) as exc:
-            data = encode(error_reply(rid, ProtocolError(f"result not sendable: {exc}")))
-        if len(data) > MAX_MESSAGE_BYTES:
-            exc = ProtocolError(
-                f"the reply is {len(data):,} bytes, over the {MAX_MESSAGE_BYTES:,}-byte bound "
-                "(the command ran; ask for less)"
-            )
+            data = encode_bounded(message, MAX_MESSAGE_BYTES)  # stops at the bound
+        except ReplyTooLargeError as exc:
             self._log_error(rid, "-", exc)
             data = encode(error_reply(rid, exc))
+        except (ProtocolError, ValueError, TypeError) as exc:
+            data = encode(error_reply(rid, ProtocolError(f"result not sendable: {exc}")))
         self.wfile.write(data)
         self.wfile.flush()
 

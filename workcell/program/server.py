@@ -147,6 +147,7 @@ class Server(socketserver.ThreadingTCPServer):
 
     def _rooted(self, session: Session) -> Session:
         session.root = self.root
+        session.reply_bytes = MAX_MESSAGE_BYTES
         return session
 
     def new_session(self) -> Session:

@@ -64,11 +64,22 @@ def sample_params(path: CartesianPath, step: float) -> Array:
         path.span / step,
         f"a {path.span:.4g} m {what} sampled every {step:g} m",
     )
-    out = [np.zeros(1)]
     step = min(step, path.span / (_MIN_GRID - 1)) if path.span > 0 else step
-    for k, p in enumerate(path.pieces):
-        h = min(step, p.max_step)
-        n = max(1, math.ceil(p.span / h - 1e-9), math.ceil(p.angle / _ANGLE_STEP - 1e-9))
+    counts = [
+        max(
+            1,
+            math.ceil(p.span / min(step, p.max_step) - 1e-9),
+            math.ceil(p.angle / _ANGLE_STEP - 1e-9),
+        )
+        for p in path.pieces
+    ]
+    work_limits.check(
+        "max_path_samples",
+        sum(counts),
+        f"a {path.span:.4g} m {what} sampled every {step:g} m: IK solutions",
+    )
+    out = [np.zeros(1)]
+    for k, (p, n) in enumerate(zip(path.pieces, counts, strict=True)):
         out.append(path.starts[k] + p.span * np.arange(1, n + 1) / n)
     return np.concatenate(out)
 
