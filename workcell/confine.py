@@ -72,6 +72,10 @@ def resolve_inside(root: str | os.PathLike, name: object, *, error: Error = Work
     """
     if not isinstance(name, str) or not name.strip():
         raise error(f"a file name must be a non-empty string, got {name!r}")
+    try:
+        os.fsencode(name)
+    except UnicodeEncodeError:
+        raise error(f"file name {name!r} refused: it holds a lone surrogate") from None
     rule = (
         "file names are relative to the server's root folder: no absolute paths, '~', "
         "'..' or hidden ('.') names"

@@ -163,7 +163,9 @@ def parse_limit(text: str) -> tuple[str, float]:
 
 
 def _fmt(v: float) -> str:
-    if isinstance(v, int) or (math.isfinite(v) and v == int(v) and abs(v) < 1e15):
+    if (isinstance(v, int) and abs(v) < 10**15) or (
+        math.isfinite(v) and v == int(v) and abs(v) < 1e15
+    ):
         return f"{int(v):,}"
     return f"{v:.4g}"
 
