@@ -20,6 +20,7 @@ MODULES = [
     "workcell.spatial_checks",
     "workcell.files",
     "workcell.confine",
+    "workcell.tempfiles",
     "workcell.solids",
     "workcell.modeller.surface",
     "workcell.modeller.model",

@@ -8,7 +8,9 @@ FIFO, a device) is refused; an existing file keeps its mode (and, when allowed, 
 owner). A temp file is removed on any error, on Ctrl-C and on SIGTERM. Every
 file-system failure (missing folder, not a folder, permission, read-only, name too long,
 disk full) becomes the caller's :class:`~workcell.errors.WorkcellError` subclass naming
-the path; :func:`check_writable` runs the same checks before expensive work starts.
+the path; :func:`check_writable` runs the same checks before expensive work starts. A
+temp file's name says which machine and process writes it, and the next write of the
+same file removes those whose process died (SIGKILL leaves them: nothing runs then).
 
 Reading (:func:`read_bytes`, :func:`read_text`, :func:`load_json`): regular files only
 (a folder, a FIFO, a socket or a device is refused before anything opens it, and the
@@ -23,15 +25,10 @@ Confinement (:func:`resolve_inside`, :func:`leaves_root`) lives in :mod:`workcel
 
 from __future__ import annotations
 
-import atexit
 import contextlib
-import errno
 import json
 import os
-import secrets
-import signal
 import stat
-import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -39,6 +36,8 @@ from typing import Any
 from workcell import confine, limits
 from workcell.confine import leaves_root, resolve_inside
 from workcell.errors import WorkcellError
+from workcell.tempfiles import install_sigterm_cleanup, reason, temp_file
+from workcell.tempfiles import kind as file_kind
 
 __all__ = [
     "atomic_path",
@@ -58,86 +57,32 @@ __all__ = [
 
 Error = type[WorkcellError]
 
-_REASONS = {
-    errno.ENOENT: "no such file or folder",
-    errno.ENOTDIR: "a part of the path is not a folder",
-    errno.EACCES: "permission denied",
-    errno.EPERM: "operation not permitted",
-    errno.EROFS: "read-only file system",
-    errno.ENAMETOOLONG: "file name too long",
-    errno.ENOSPC: "no space left on device",
-    errno.EDQUOT: "disk quota exceeded",
-    errno.EISDIR: "it is a folder",
-    errno.ELOOP: "too many levels of symbolic links",
-    errno.EEXIST: "it exists and is not a folder",
-}
 
-
-def _reason(exc: OSError) -> str:
-    return _REASONS.get(exc.errno or 0) or exc.strerror or str(exc)
-
-
-# ------------------------------------------------------------------ SIGTERM cleanup
-_live: set[str] = set()
-_live_lock = threading.Lock()
-_previous: Any = None
-_installed = False
-
-
-def _remove_live() -> None:
-    """Remove the temp files of writes still in progress (a signal, or the interpreter
-    leaving while daemon threads write)."""
-    with _live_lock:
-        tmps = list(_live)
-    for tmp in tmps:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-
-
-atexit.register(_remove_live)
-
-
-def _on_sigterm(signum: int, frame: Any) -> None:
-    _remove_live()
-    if callable(_previous):
-        _previous(signum, frame)
-        return
-    signal.signal(signum, signal.SIG_DFL)  # die of the signal, as without us
-    os.kill(os.getpid(), signum)
-
-
-def install_sigterm_cleanup() -> bool:
-    """Make SIGTERM remove the temp files of writes in progress (then act as before).
-
-    Needs the main thread: :func:`atomic_path` calls it when it runs there; servers call
-    it at start for their worker threads. Returns whether the handler is installed.
-    """
-    global _previous, _installed
-    if _installed:
-        return True
-    if threading.current_thread() is not threading.main_thread():
-        return False
-    prev = signal.getsignal(signal.SIGTERM)
-    if prev is signal.SIG_IGN:
-        return False
-    _previous = prev if callable(prev) else None
-    signal.signal(signal.SIGTERM, _on_sigterm)
-    _installed = True
-    return True
+def _name(path: str | os.PathLike, doing: str, error: Error) -> str:
+    """``path`` as a string the file system can take; ``error`` for a NUL character or a
+    lone surrogate (text no file name can hold; quoted escaped in the message)."""
+    name = os.fspath(path)
+    try:
+        os.fsencode(name)
+    except UnicodeEncodeError:
+        raise error(f"cannot {doing} {name!r}: the name holds a lone surrogate") from None
+    if "\x00" in str(name):
+        raise error(f"cannot {doing} {name!r}: the name holds a NUL character")
+    return name
 
 
 # ------------------------------------------------------------------ writing
 def _target(path: str | os.PathLike, error: Error) -> tuple[Path, os.stat_result | None]:
     """The file a write to ``path`` replaces (symbolic links followed) and its stat."""
-    p = Path(os.path.realpath(os.fspath(path)))
+    p = Path(os.path.realpath(_name(path, "write", error)))
     try:
         st = os.stat(p)
     except FileNotFoundError:
         st = None
     except OSError as exc:
-        raise error(f"cannot write '{path}': {_reason(exc)}") from exc
+        raise error(f"cannot write '{path}': {reason(exc)}") from exc
     if st is not None and not stat.S_ISREG(st.st_mode):
-        kind = "a folder" if stat.S_ISDIR(st.st_mode) else _kind(st.st_mode)
+        kind = "a folder" if stat.S_ISDIR(st.st_mode) else file_kind(st.st_mode)
         raise error(
             f"cannot write '{path}': it is {kind}, not a regular file; refusing to replace it"
         )
@@ -148,7 +93,7 @@ def _target(path: str | os.PathLike, error: Error) -> tuple[Path, os.stat_result
         why = (
             f"folder '{folder}' does not exist"
             if isinstance(exc, FileNotFoundError)
-            else _reason(exc)
+            else reason(exc)
         )
         raise error(f"cannot write '{path}': {why}") from exc
     if not stat.S_ISDIR(fst.st_mode):
@@ -162,42 +107,6 @@ def _target(path: str | os.PathLike, error: Error) -> tuple[Path, os.stat_result
     return p, st
 
 
-def _kind(mode: int) -> str:
-    for test, kind in (
-        (stat.S_ISFIFO, "a FIFO"),
-        (stat.S_ISCHR, "a character device"),
-        (stat.S_ISBLK, "a block device"),
-        (stat.S_ISSOCK, "a socket"),
-    ):
-        if test(mode):
-            return kind
-    return "not a regular file"
-
-
-@contextlib.contextmanager
-def _temp_file(p: Path, suffix: str, path: object, error: Error, doing: str) -> Iterator[str]:
-    """A new empty file (mode 0600) beside ``p``, removed when the block ends (unless it
-    was renamed away). Its name is chosen and tracked before it exists, so no Ctrl-C or
-    SIGTERM between creating and removing it can leave it behind."""
-    tmp = os.path.join(p.parent, f".{p.name[:80]}.{secrets.token_hex(4)}{suffix}")
-    with _live_lock:
-        _live.add(tmp)
-    not_ours = False
-    try:
-        try:
-            os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY | os.O_CLOEXEC, 0o600))
-        except OSError as exc:
-            not_ours = isinstance(exc, FileExistsError)
-            raise error(f"cannot {doing} '{path}': {_reason(exc)}") from exc
-        yield tmp
-    finally:
-        if not not_ours:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-        with _live_lock:
-            _live.discard(tmp)
-
-
 def check_writable(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
     """Check that ``path`` can be written (the checks of :func:`atomic_path`, plus a real
     temp file created and removed in its folder); return the file that would be written.
@@ -205,7 +114,7 @@ def check_writable(path: str | os.PathLike, *, error: Error = WorkcellError) -> 
     Call it before expensive work whose result goes to ``path``.
     """
     p, _ = _target(path, error)
-    with _temp_file(p, ".probe", path, error, "write"):
+    with temp_file(p, ".probe", path, error, "write"):
         pass
     return p
 
@@ -230,7 +139,7 @@ def atomic_path(
     """
     p, st = _target(path, error)
     install_sigterm_cleanup()
-    with _temp_file(p, suffix, path, error, "write") as tmp:
+    with temp_file(p, suffix, path, error, "write") as tmp:
         try:
             yield tmp
             with open(tmp, "rb+") as f:
@@ -248,7 +157,7 @@ def atomic_path(
                 os.chmod(tmp, 0o666 & ~umask)
             os.replace(tmp, p)
         except OSError as exc:
-            raise error(f"cannot write '{path}': {_reason(exc)}") from exc
+            raise error(f"cannot write '{path}': {reason(exc)}") from exc
 
 
 def atomic_write_bytes(
@@ -279,10 +188,10 @@ def check_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Pa
         except FileNotFoundError:
             here = here.parent  # the root folder exists: this ends
         except OSError as exc:
-            raise error(f"cannot write into folder '{path}': {_reason(exc)}") from exc
+            raise error(f"cannot write into folder '{path}': {reason(exc)}") from exc
     if not stat.S_ISDIR(st.st_mode):
         raise error(f"cannot write into folder '{path}': '{here}' is not a folder")
-    with _temp_file(here / "workcell", ".probe", path, error, "write into folder"):
+    with temp_file(here / "workcell", ".probe", path, error, "write into folder"):
         pass
     return p
 
@@ -293,7 +202,7 @@ def make_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Pat
     try:
         p.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise error(f"cannot create folder '{path}': {_reason(exc)}") from exc
+        raise error(f"cannot create folder '{path}': {reason(exc)}") from exc
     return p
 
 
@@ -328,22 +237,21 @@ def read_bytes(
     """
     bound = limits.current().max_file_bytes
     root = confine.current_root() if root is None else root
-    name = os.fspath(path)
+    name = _name(path, f"read {what}", error)
     if root is not None:
         why = leaves_root(name, root)
         if why is not None:
             raise error(f"cannot read {what} '{path}': {why}")
     try:
         st = os.stat(name)
-    except (OSError, ValueError) as exc:
-        why = _reason(exc) if isinstance(exc, OSError) else "the name holds a NUL character"
-        raise error(f"cannot read {what} '{path}': {why}") from None
+    except OSError as exc:
+        raise error(f"cannot read {what} '{path}': {reason(exc)}") from None
     _regular(st, path, what, error)
     limits.check("max_file_bytes", st.st_size, f"{what} '{path}'")
     try:
         fd = os.open(name, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
     except OSError as exc:
-        raise error(f"cannot read {what} '{path}': {_reason(exc)}") from exc
+        raise error(f"cannot read {what} '{path}': {reason(exc)}") from exc
     try:
         st = os.fstat(fd)
         _regular(st, path, what, error)
@@ -355,7 +263,7 @@ def read_bytes(
         with os.fdopen(os.dup(fd), "rb") as f:
             data = f.read(bound + 1)
     except OSError as exc:
-        raise error(f"cannot read {what} '{path}': {_reason(exc)}") from exc
+        raise error(f"cannot read {what} '{path}': {reason(exc)}") from exc
     finally:
         os.close(fd)
     limits.check("max_file_bytes", len(data), f"{what} '{path}' (read stopped there)")
@@ -366,7 +274,7 @@ def _regular(st: os.stat_result, path: object, what: str, error: Error) -> None:
     """``error`` unless ``st`` is a regular file's."""
     if stat.S_ISREG(st.st_mode):
         return
-    kind = "a folder" if stat.S_ISDIR(st.st_mode) else _kind(st.st_mode)
+    kind = "a folder" if stat.S_ISDIR(st.st_mode) else file_kind(st.st_mode)
     raise error(f"cannot read {what} '{path}': it is {kind}, not a regular file")
 
 
