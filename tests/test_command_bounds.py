@@ -18,19 +18,13 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_limits import refused
 
 from workcell import limits
-from workcell.errors import LimitError, ProtocolError
+from workcell.errors import ProtocolError
 from workcell.examples import thesis_joints
 from workcell.program.protocol import ReplyTooLargeError, encode, encode_bounded
 from workcell.sim import Simulator
-
-
-def refused(fn, limit: str) -> LimitError:
-    with pytest.raises(LimitError) as info:
-        fn()
-    assert f"over the limit {limit} = " in str(info.value)
-    return info.value
 
 
 @pytest.fixture

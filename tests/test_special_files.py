@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import os
 import socket
-import threading
 from pathlib import Path
 
 import pytest
 import trimesh
+from blocking import outcome
 
 from workcell import Model, Workcell, limits
 from workcell.errors import LimitError, ModelError, StudyError, WorkcellError
@@ -34,23 +34,6 @@ def special(folder: Path, name: str, kind: str) -> tuple[Path, socket.socket | N
         return p, s
     p.symlink_to("/dev/zero")
     return p, None
-
-
-def outcome(fn, seconds: float = 10.0) -> BaseException | None:
-    """What ``fn`` raised, from a thread that must finish within ``seconds``."""
-    out: list[BaseException | None] = [None]
-
-    def run():
-        try:
-            fn()
-        except BaseException as exc:  # handed back to the test
-            out[0] = exc
-
-    t = threading.Thread(target=run, daemon=True)
-    t.start()
-    t.join(seconds)
-    assert not t.is_alive(), "the reader blocked"
-    return out[0]
 
 
 def _urdf(folder: Path, mesh: str) -> Path:

@@ -28,7 +28,7 @@ from typing import Any
 
 from workcell.errors import WorkcellError
 
-__all__ = ["install_sigterm_cleanup", "kind", "reason", "temp_file"]
+__all__ = ["install_sigterm_cleanup", "kind", "process_alive", "reason", "temp_file"]
 
 Error = type[WorkcellError]
 
@@ -146,7 +146,7 @@ def _remove_stale_temps(p: Path) -> None:
             with _live_lock:
                 if full in _live:
                     continue
-        elif _alive(pid):
+        elif process_alive(pid):
             continue
         with contextlib.suppress(OSError):
             st = os.lstat(full)
@@ -154,7 +154,8 @@ def _remove_stale_temps(p: Path) -> None:
                 os.unlink(full)
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` of this machine runs (another user's counts as running)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

@@ -14,13 +14,13 @@ from __future__ import annotations
 
 import os
 import socket
-import threading
 from pathlib import Path
 
 import mujoco
 import numpy as np
 import pytest
 import trimesh
+from blocking import outcome
 from robot_files import arm_mjcf, write, write_meshes
 
 from workcell import limits
@@ -248,23 +248,6 @@ def test_the_server_refuses_an_mjcf_mesh_through_a_linked_meshdir(tmp_path):
 
 
 # ---------------------------------------------------------------------- special files
-def finishes(fn, seconds: float = 10.0) -> BaseException | None:
-    """Run ``fn`` in a thread; the exception it raised (it must finish in ``seconds``)."""
-    out: list[BaseException | None] = [None]
-
-    def run():
-        try:
-            fn()
-        except BaseException as exc:  # handed back to the test
-            out[0] = exc
-
-    t = threading.Thread(target=run, daemon=True)
-    t.start()
-    t.join(seconds)
-    assert not t.is_alive(), "blocked"
-    return out[0]
-
-
 SPECIAL = {
     "mesh": f"{MESH.format(f='special.stl')}{BODY}",
     "include": f'<include file="special.stl"/>{BODY}',
@@ -289,7 +272,7 @@ def test_special_files_named_in_mjcf_are_refused_without_blocking(tmp_path, wher
     path = write(tmp_path, "model.xml", f"<mujoco>{SPECIAL[where]}</mujoco>")
     try:
         for root in (None, tmp_path):
-            exc = finishes(lambda root=root: from_mjcf(path, root=root))
+            exc = outcome(lambda root=root: from_mjcf(path, root=root))
             assert isinstance(exc, ModelError), exc
             outside = root is not None and kind == "device"  # a link to /dev/zero
             assert ("leads outside the root" if outside else "not a regular file") in str(exc)
@@ -311,7 +294,7 @@ def test_a_fifo_swapped_in_after_the_check_is_refused_not_waited_on(tmp_path, mo
         return real_stat(__file__) if str(p).endswith("swapped.stl") else st
 
     monkeypatch.setattr(files.os, "stat", looks_regular)
-    exc = finishes(lambda: files.read_bytes(tmp_path / "swapped.stl", error=ModelError))
+    exc = outcome(lambda: files.read_bytes(tmp_path / "swapped.stl", error=ModelError))
     assert isinstance(exc, ModelError), exc
     assert "it is a FIFO" in str(exc)
 

@@ -29,6 +29,7 @@ from pathlib import Path
 from workcell import limits
 from workcell.errors import ProgramError, WorkcellError
 from workcell.files import atomic_write_text, read_text
+from workcell.tempfiles import process_alive
 
 __all__ = [
     "Throttle",
@@ -129,22 +130,12 @@ def remove_stale_token_files() -> list[Path]:
         pid = None if data is None else data.get("pid")
         if data is None or data.get("machine") != socket.gethostname():
             continue
-        if not isinstance(pid, int) or isinstance(pid, bool) or pid <= 0 or _running(pid):
+        if not isinstance(pid, int) or isinstance(pid, bool) or pid <= 0 or process_alive(pid):
             continue
         with contextlib.suppress(OSError):
             path.unlink()
             removed.append(path)
     return removed
-
-
-def _running(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:
-        return True  # another user's process
-    return True
 
 
 def given_token(

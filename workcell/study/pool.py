@@ -9,8 +9,9 @@ later workers (after a crash, in the next study) are ready in milliseconds too; 
 where neither exists. Workers get the parent's current environment (a fork server's
 would be that of when it started), run with one thread for numpy's and OpenMP's pools
 and ignore SIGINT (Ctrl-C is the parent's to handle); a worker ends when the study's
-process dies, however it dies (kill -9 included: the kernel's parent-death signal on
-Linux, else a thread that watches the parent every second). Each receives the study's setup
+process dies, however it dies (kill -9 included; :func:`workcell.native.die_with_parent`:
+the kernel's parent-death signal when the study forked it on Linux, else a thread that
+watches the study's process every second). Each receives the study's setup
 once, compiles the cell, then evaluates batches of candidates, sending each row back as
 soon as it is done. The parent hands a batch to each idle worker and waits on every worker's
 pipe and process at once.
@@ -40,6 +41,7 @@ from multiprocessing.connection import Connection, wait
 from typing import Any
 
 from workcell.errors import StudyError
+from workcell.native import die_with_parent
 
 __all__ = ["CRASH_MESSAGE", "ProcessPool", "peak_rss_mb", "stop_fork_server"]
 
@@ -55,39 +57,13 @@ def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _die_with(parent: int) -> None:
-    """End this worker when the study's process ``parent`` dies, whatever killed it
-    (kill -9 included): at once on Linux (the kernel's parent-death signal, when the
-    parent is the one that forked us), else within a second (a watching thread)."""
-    if os.getppid() == parent and sys.platform == "linux":
-        with contextlib.suppress(OSError, AttributeError):
-            import ctypes
-
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
-            if os.getppid() != parent:  # it died before the call took effect
-                os._exit(1)
-
-    def watch() -> None:
-        while True:
-            time.sleep(1.0)
-            try:
-                os.kill(parent, 0)
-            except ProcessLookupError:
-                os._exit(1)
-            except OSError:
-                pass  # alive, another user's (never ours): keep watching
-
-    threading.Thread(target=watch, name="workcell-parent-watch", daemon=True).start()
-
-
 def _worker(conn: Connection, setup_bytes: bytes, environ: dict[str, str], parent: int) -> None:
     """A worker's life: set up, then evaluate batches until told to stop (module doc).
 
     ``environ``: the parent's environment when it started the worker (a fork server's
     children would otherwise see the environment of when the fork server started);
     ``parent``: the study's process id (the worker ends when it dies)."""
-    _die_with(parent)
+    die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     os.environ.clear()
     os.environ.update(environ)
