@@ -230,7 +230,8 @@ class Connection(socketserver.StreamRequestHandler):
                 self._not_a_hello(None, f"no protocol message ({exc})"), "not a hello"
             ) from None
         if req.command != "hello":
-            raise _Closing(self._not_a_hello(req.id, f"command {req.command!r}"), "not a hello")
+            what = f"command {clean_log_text(repr(req.command), 60)}"
+            raise _Closing(self._not_a_hello(req.id, what), "not a hello")
         try:
             return {"id": req.id, "result": self._hello(req.id, req.args)}
         except _Closing:
