@@ -19,7 +19,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
-from robot_files import RTB
+from robot_files import RTB, urdf_fk
 
 from workcell import spatial
 from workcell.robots import from_mjcf, from_urdf
@@ -50,19 +50,6 @@ def compile_panda(folder: Path) -> Path:
     return path
 
 
-def yourdfpy_fk(path, names, Q, tip, base):
-    import yourdfpy
-
-    u = yourdfpy.URDF.load(
-        str(path), load_meshes=False, build_scene_graph=True, load_collision_meshes=False
-    )
-    out = []
-    for q in Q:
-        u.update_cfg(dict(zip(names, q, strict=True)))
-        out.append(u.get_transform(tip, base))
-    return np.array(out)
-
-
 def reach_rate(robot, n, seed, reference_fk):
     """Success rate of Robot.ik on n random reachable targets; every success re-checked
     by ``reference_fk`` (joint vectors (m, dof) -> poses (m, 4, 4), not the project's FK)."""
@@ -86,30 +73,21 @@ def reach_rate(robot, n, seed, reference_fk):
 
 
 @needs_rtb
-def test_the_panda_reaches_99_percent_of_random_reachable_targets(tmp_path):
-    path = compile_panda(tmp_path)
-    robot = quiet_urdf(path, tip_link="panda_link8")
+@pytest.mark.parametrize("arm", ["panda", "iiwa"])
+def test_redundant_arms_reach_99_percent_of_random_reachable_targets(arm, tmp_path):
+    if arm == "panda":
+        path, tip, base = compile_panda(tmp_path), "panda_link8", "panda_link0"
+    else:
+        path, tip, base = RTB / IIWA, "tool0", "base_link"
+    robot = quiet_urdf(path, tip_link=tip)
     assert robot.dof == 7
     assert robot.ik_family is None
     names = [j.name for j in robot.joints]
 
     def fk(Q):
-        return yourdfpy_fk(path, names, Q, "panda_link8", "panda_link0")
+        return urdf_fk(path, names, Q, tip, base)
 
     assert reach_rate(robot, 500, 1, fk) >= 0.99
-
-
-@needs_rtb
-def test_the_iiwa_reaches_99_percent_of_random_reachable_targets():
-    path = RTB / IIWA
-    robot = quiet_urdf(path)
-    assert robot.dof == 7
-    names = [j.name for j in robot.joints]
-
-    def fk(Q):
-        return yourdfpy_fk(path, names, Q, "tool0", "base_link")
-
-    assert reach_rate(robot, 500, 2, fk) >= 0.99
 
 
 PANDA_XML = """<mujoco model="panda_like">

@@ -29,7 +29,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from robot_files import RTB
+from robot_files import RTB, urdf_fk
 
 from workcell import spatial
 from workcell.robots import Robot, from_urdf, get, puma560
@@ -75,16 +75,7 @@ def ros_puma():
 
 def file_fk(Q):
     """The file's link7 in its root link1, by yourdfpy (not the project's URDF reader)."""
-    import yourdfpy
-
-    u = yourdfpy.URDF.load(
-        str(RTB / PUMA_FILE), load_meshes=False, build_scene_graph=True, load_collision_meshes=False
-    )
-    out = []
-    for q in Q:
-        u.update_cfg(dict(zip([f"j{i}" for i in range(1, 7)], q, strict=True)))
-        out.append(u.get_transform("link7", "link1"))
-    return np.array(out)
+    return urdf_fk(RTB / PUMA_FILE, [f"j{i}" for i in range(1, 7)], Q, "link7", "link1")
 
 
 @needs_rtb
