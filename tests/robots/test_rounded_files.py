@@ -248,3 +248,21 @@ def test_arms_beyond_the_rounding_have_no_family_and_say_why():
     shifts = np.zeros((6, 3))
     shifts[4, 1] = 1e-5  # axis 5 misses axis 4 by 10 um
     assert rounded(exact, np.zeros((6, 2)), shifts).ik_family is None
+
+
+def test_batched_pose_jacobians_are_the_finite_differences_of_fk():
+    from workcell.robots.ik_refine import pose_jacobians
+
+    robot = get("kuka_kr6_r700", geometry=False)
+    Q = np.random.default_rng(15).uniform(robot.lower, robot.upper, (10, 6))
+    T, J = pose_jacobians(robot, Q)
+    np.testing.assert_allclose(T, robot.fk_batch(Q), atol=1e-14)
+    h = 1e-6
+    for q, Jq in zip(Q, J, strict=True):
+        for i in range(6):
+            dq = np.zeros(6)
+            dq[i] = h
+            Tp, Tm = robot.fk(q + dq), robot.fk(q - dq)
+            np.testing.assert_allclose(Jq[:3, i], (Tp[:3, 3] - Tm[:3, 3]) / (2 * h), atol=1e-8)
+            W = (Tp[:3, :3] - Tm[:3, :3]) / (2 * h) @ robot.fk(q)[:3, :3].T  # [w]x
+            np.testing.assert_allclose(Jq[3:, i], [W[2, 1], W[0, 2], W[1, 0]], atol=1e-8)

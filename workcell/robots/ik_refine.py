@@ -75,8 +75,11 @@ def pose_jacobians(robot: Robot, Q: Array) -> tuple[Array, Array]:
     R = F[:, 1:, :3, :3]
     z = np.einsum("mnij,nj->mni", R, robot._axes)  # axis directions (m, n, 3)
     p = np.einsum("mnij,nj->mni", R, robot._points) + F[:, 1:, :3, 3]
+    r = T[:, None, :3, 3] - p  # joint axis points to the tool point
     J = np.empty((m, 6, n))
-    J[:, :3] = np.cross(z, T[:, None, :3, 3] - p).transpose(0, 2, 1)
+    J[:, 0] = z[..., 1] * r[..., 2] - z[..., 2] * r[..., 1]  # z x r, written out (faster
+    J[:, 1] = z[..., 2] * r[..., 0] - z[..., 0] * r[..., 2]  # than np.cross on small arrays)
+    J[:, 2] = z[..., 0] * r[..., 1] - z[..., 1] * r[..., 0]
     J[:, 3:] = z.transpose(0, 2, 1)
     if robot._any_prismatic:
         pr = robot._prismatic
