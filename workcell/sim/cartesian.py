@@ -292,12 +292,12 @@ class CartesianCommands:
         ``config``: configuration letters to require (e.g. "ru"): the in-limit solution
         of that configuration nearest the current joints. Default: of the in-limit
         solutions, nearest first, the first whose joint move keeps the planning clearance
-        (checked as ``plan`` checks: :mod:`workcell.plan.motion`), else the nearest; the
+        (checked as ``plan`` checks: :mod:`workcell.sim.planned`), else the nearest; the
         move's event says which configuration and why. ``zone`` (m): blend into the next
         move. Raises UnreachableError saying why. With ``plan``, a collision-free joint
-        path to the nearest solution that has one (it stops at its end: no zone);
-        PlanningError when the pose is unreachable, every solution is in collision or no
-        path is found.
+        path to the nearest solution that has one (:mod:`workcell.sim.planned`; it stops
+        at its end: no zone); PlanningError when the pose is unreachable, every solution
+        is in collision or no path is found.
         """
         name = self._robot(robot)
         target = world_target(T, "move_end_effector", name)
