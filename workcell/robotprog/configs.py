@@ -6,14 +6,18 @@ wrist ``n``/``f``. The vendors' published definitions, and how they map:
 
 - **KUKA Status S** (bits): bit 0 = 1 when the wrist root point has a negative x in the
   A1 coordinate system ("overhead area": our ``l``); bit 1 = 1 when A3 >= phi, the
-  stretched-arm angle (the elbow above the line: our ``u``; KUKA's home A2 = -90, A3 = 90
-  reads bit 1 = 1); bit 2 = 1 when A5 <= 0 (-180 < A5 <= 0 or A5 >= 180), 0 when
-  sin(A5) > 0. **Turn T**: bit i = 1 when axis i+1 is negative.
+  stretched-arm angle (KUKA's home A2 = -90, A3 = 90 reads bit 1 = 1): the elbow on the
+  upper side of the arm itself, which is our ``u`` while the wrist is ahead of the
+  shoulder and our ``d`` behind it (our letters say up and down in the base's z); bit 2 = 1 when A5 <= 0
+  (-180 < A5 <= 0 or A5 >= 180), 0 when sin(A5) > 0. **Turn T**: bit i = 1 when axis
+  i+1 is negative.
 - **ABB confdata** [cf1, cf4, cf6, cfx]: cfN the quadrant of axis N, floor(angle / 90
   deg) (0 for 0..90, -1 for -90..0, ...); cfx 0..7 = 4 x (wrist centre behind axis 1:
-  ``l``) + 2 x (wrist centre behind the lower arm: ``d``) + (axis 5 negative).
+  ``l``) + 2 x (wrist centre behind the lower arm: the elbow on the arm's lower side, as
+  KUKA's bit 1 = 0) + (axis 5 negative).
 - **FANUC CONFIG** 'F|N U|D T|B, t4, t5, t6': flip (``f``) or no flip (``n``; the LR Mate
-  200iD at J5 = -90, tool down, is N), elbow up or down, front (T, ``r``) or back (B), and
+  200iD at J5 = -90, tool down, is N), elbow up or down (on the arm's upper side, as
+  KUKA's bit 1), front (T, ``r``) or back (B), and
   the turn numbers of J4, J5, J6 ($SCR_GRP.$TURN_AXIS's default): floor((J + 180) / 360)
   with J in degrees (0 for -180 <= J < 180, 1 for 180 <= J < 540, ...).
 - **Universal Robots**: none in the pose; ``get_inverse_kin(p, qnear=q)`` picks the
@@ -37,7 +41,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell.errors import KinematicsError, ProgramError
-from workcell.robots.ik_closed import config_of
+from workcell.robots.ik_closed import config_of, family_model
+from workcell.robots.opw_solve import arm_plane
 from workcell.robots.robot import Robot
 
 __all__ = [
@@ -66,11 +71,21 @@ def letters(robot: Robot, q: ArrayLike) -> str | None:
         return None
 
 
+def _arm_up(robot: Robot, q: Array, c: str) -> bool:
+    """The elbow on the arm's own upper side (KUKA's A3 >= phi): for an OPW arm the side
+    it has with the elbow up and the wrist ahead of the shoulder (our ``u`` there, ``d``
+    when the wrist is behind the shoulder); for other arms our ``u``."""
+    if robot.ik_family == "opw":
+        m = family_model(robot)
+        return arm_plane(m, m.theta(q[None, :])[0])[1] >= 0.0
+    return c[1] == "u"
+
+
 def kuka_status_turn(robot: Robot, q: ArrayLike) -> tuple[int, int]:
     """KUKA's Status and Turn of joint values q (rad), module doc."""
     v = np.asarray(q, dtype=np.float64)
     c = letters(robot, v) or "ru"
-    s = (c[0] == "l") | (c[1] == "u") << 1 | (math.sin(float(v[4])) <= 0.0) << 2
+    s = (c[0] == "l") | _arm_up(robot, v, c) << 1 | (math.sin(float(v[4])) <= 0.0) << 2
     t = sum(1 << i for i in range(min(6, len(v))) if v[i] < 0.0)
     return int(s), int(t)
 
@@ -83,7 +98,7 @@ def abb_confdata(robot: Robot, q: ArrayLike) -> tuple[int, int, int, int]:
     def quadrant(a: float) -> int:
         return math.floor(math.degrees(a) / 90.0 + 1e-12)
 
-    cfx = 4 * (c[0] == "l") + 2 * (c[1] == "d") + (float(v[4]) < 0.0)
+    cfx = 4 * (c[0] == "l") + 2 * (not _arm_up(robot, v, c)) + (float(v[4]) < 0.0)
     return quadrant(float(v[0])), quadrant(float(v[3])), quadrant(float(v[5])), int(cfx)
 
 
@@ -115,7 +130,7 @@ def fanuc_config(robot: Robot, q: ArrayLike) -> tuple[str, int, int, int]:
     """FANUC's configuration ('N U T', t4, t5, t6) of our joint values q (rad)."""
     v = np.asarray(q, dtype=np.float64)
     c = letters(robot, v) or "run"
-    flags = ("F" if c[2] == "f" else "N") + " " + ("U" if c[1] == "u" else "D")
+    flags = ("F" if c[2] == "f" else "N") + " " + ("U" if _arm_up(robot, v, c) else "D")
     flags += " " + ("T" if c[0] == "r" else "B")
     return flags, _turn(float(v[3])), _turn(float(v[4])), _turn(float(v[5]))
 
