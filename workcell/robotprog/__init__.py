@@ -8,15 +8,18 @@ KRL, RAPID or FANUC TP (:mod:`.urscript`, :mod:`.krl`, :mod:`.rapid`, :mod:`.fan
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from workcell.errors import ProgramError
+from workcell import limits
+from workcell.errors import ProgramError, WorkcellError
 from workcell.robotprog import fanuc, krl, rapid, urscript
 from workcell.robotprog.instructions import Program, from_sim
+from workcell.robotprog.runtime import VM, RobotProgram
 
-__all__ = ["LANGUAGES", "SUFFIXES", "export", "language_of"]
+__all__ = ["LANGUAGES", "SUFFIXES", "VM", "RobotProgram", "export", "language_of", "load"]
 
 LANGUAGES = ("urscript", "krl", "rapid", "fanuc_ls")
 SUFFIXES = {".script": "urscript", ".src": "krl", ".mod": "rapid", ".ls": "fanuc_ls"}
@@ -67,3 +70,44 @@ def export(
         p.parent.mkdir(parents=True, exist_ok=True)
         p.write_text(text, encoding="utf-8")
     return [str(p) for p, _ in written]
+
+
+_IO = re.compile(r"I/O: (output|input) (\d+) = ([A-Za-z_][A-Za-z0-9_.]*)")
+
+
+def _io_table(text: str) -> tuple[dict[int, str], dict[int, str]]:
+    """The I/O names a file's header lists (``I/O: output 1 = gripper``)."""
+    outputs: dict[int, str] = {}
+    inputs: dict[int, str] = {}
+    for kind, n, name in _IO.findall(text):
+        (outputs if kind == "output" else inputs)[int(n)] = name
+    return outputs, inputs
+
+
+def load(path: str | Path, *, language: str | None = None) -> RobotProgram:
+    """Read a robot program (``language`` as for :func:`export`, default from the suffix;
+    a KRL ``.src`` reads the ``.dat`` beside it) as a :class:`RobotProgram`; its
+    :meth:`~RobotProgram.run` executes it. ProgramError with ``file:line:column`` for
+    what cannot be read or is not supported (docs/robot-programs.md lists what is)."""
+    from workcell.robotprog import read_fanuc, read_krl, read_rapid, read_urscript
+
+    lang = language_of(path, language)
+    p = Path(path)
+    if not p.is_file():
+        raise ProgramError(f"no robot program file '{p}'")
+    limits.check("max_file_bytes", p.stat().st_size, f"robot program '{p}'")
+    readers = {
+        "urscript": read_urscript.read,
+        "krl": read_krl.read,
+        "rapid": read_rapid.read,
+        "fanuc_ls": read_fanuc.read,
+    }
+    try:
+        outputs, inputs = _io_table(p.read_text(encoding="utf-8", errors="replace"))
+        return readers[lang](p, outputs, inputs)
+    except WorkcellError:
+        raise
+    except (RecursionError, ValueError, TypeError, IndexError, KeyError, AttributeError) as exc:
+        raise ProgramError(
+            f"{p}:1:1: cannot read the program ({type(exc).__name__}: {exc})"
+        ) from exc

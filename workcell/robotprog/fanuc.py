@@ -148,7 +148,7 @@ def write(prog: Program, name: str) -> dict[str, str]:
                 via[:3, 3] = ins.via
                 pv = point(_cart(prog, via, ins.q))
                 end = point(_cart(prog, ins.pose, ins.q))
-                mn.append(f"C P[{pv}] ")
+                mn.append(f"C P[{pv}]")
                 mn.append(f":  P[{end}] {speed} {term(ins.zone)}{opt}")
         elif isinstance(ins, Wait):
             mn.append(f"WAIT {ins.seconds:.10g}(sec)")
@@ -172,6 +172,9 @@ def write(prog: Program, name: str) -> dict[str, str]:
     for line in lines:
         if line.startswith(":"):
             body.append(f"    {line} ;")
+        elif line.startswith("C "):  # the via line: the statement goes on below
+            k += 1
+            body.append(f"{k:4d}:  {line}")
         else:
             k += 1
             body.append(f"{k:4d}:  {line} ;")

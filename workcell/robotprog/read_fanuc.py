@@ -1,0 +1,678 @@
+"""FANUC TP as ASCII (``.ls``): the reader.
+
+Read: ``/PROG``, ``/ATTR`` and ``/APPL`` (their contents are the editor's: not run),
+``/MN`` with numbered lines and ``:`` continuation lines, ``/POS`` (Cartesian positions
+X, Y, Z mm, W, P, R deg with UF, UT and CONFIG; joint positions J1..J6 deg, the
+controller's J3), ``/END``; statements: ``!`` remarks and ``//`` commented lines,
+``J``/``L`` to ``P[n]`` or ``PR[n]`` at ``n%`` (J), ``mm/sec``, ``cm/min``, ``inch/min``
+(L, C) with ``FINE`` or ``CNTn`` and the options ``ACCn`` and ``Offset,PR[n]``, ``C P[via]``
+with the end on the next line, ``DO[n]=ON|OFF`` and ``RO[n]``, ``WAIT s(sec)``, ``WAIT
+DI[n]=ON|OFF``, ``R[n]=`` and ``PR[n,i]=`` arithmetic, ``PR[n]=P[m]|PR[m]|LPOS|JPOS``,
+``LBL[n]``, ``JMP LBL[n]``, ``IF <cond>,JMP LBL[n]``, ``IF (cond) THEN``/``ELSE``/``ENDIF``,
+``FOR R[n]=a TO|DOWNTO b``/``ENDFOR``, ``UFRAME_NUM=n``, ``UTOOL_NUM=n``,
+``UFRAME[n]=PR[m]``, ``UTOOL[n]=PR[m]``, ``OVERRIDE=n%``, ``END``.
+
+Semantics: ``J ... n%`` runs at n % of each joint's limits x ``OVERRIDE``; ``CNTn`` is a
+zone of n mm (CNT has no length); ``ACCn`` is n % of 1.2 m/s^2 for L and C (not simulated
+for J); ``Offset,PR[n]`` moves the target by PR[n]'s frame in the user frame. UF 0 is
+the robot's base, UT 0 the faceplate; a frame number the file does not set is the
+robot's base, a tool number the robot's own TCP. A position taught in another UF or UT
+than the active one is a ProgramError (as on the controller). ``CALL`` (other programs),
+``SELECT``, timers, ``PAUSE``/``ABORT``, ``CR``, ``Wjnt``, ``INC``, ``Tool_Offset``, speeds
+in sec or deg/sec, and everything else stop with a ProgramError at their place.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from workcell.errors import ProgramError
+from workcell.robotprog.configs import fanuc_config, fanuc_from_joints, fanuc_to_joints
+from workcell.robotprog.exprs import ARITH, COMPARE, ExprParser, Fn, boolean, number
+from workcell.robotprog.fanuc import wpr
+from workcell.robotprog.rotations import from_zyx
+from workcell.robotprog.runtime import VM, Code, RobotProgram
+from workcell.robotprog.source import Loc, Parser, Token, error, tokenize
+from workcell.robotprog.writing import DEFAULT_TOOL_ACCELERATION
+
+__all__ = ["read"]
+
+RULES = [
+    ("_ws", r"[ \t\r\f]+"),
+    ("ref2", r"\[\s*\d+\s*,\s*\d+\s*\]"),
+    ("ref", r"\[\s*\d+\s*(?::[^\]\n]*)?\]"),
+    ("num", r"(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?"),
+    ("str", r"'[^'\n]*'|\"[^\"\n]*\""),
+    ("unit", r"mm/sec|cm/min|inch/min|deg/sec|msec|sec"),
+    ("id", r"[A-Za-z_$][A-Za-z0-9_$.]*"),
+    ("op", r"<>|<=|>=|[-+*/()\[\],:=<>%!]"),
+]
+_MN = re.compile(r"^\s*(\d+)\s*:(.*)$")
+_CONT = re.compile(r"^\s*:(.*)$")
+_FIELD = re.compile(r"([XYZWPR]|J\d)\s*=\s*([-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?)")
+
+
+def _ref(t: Token) -> tuple[int, str]:
+    inner = t.text[1:-1]
+    n, _, comment = inner.partition(":")
+    return int(n.strip()), comment.strip().strip('"')
+
+
+class Position(dict):  # type: ignore[type-arg]
+    """A position: Cartesian (X, Y, Z mm; W, P, R deg; config; uf; ut) or joint
+    (J1..J6, the controller's deg)."""
+
+
+def _positions(lines: list[tuple[int, str]], path: str) -> dict[int, Position]:
+    """The /POS section's positions."""
+    out: dict[int, Position] = {}
+    text = "\n".join(s for _, s in lines)
+    for m in re.finditer(r"P\[(\d+)(?::[^\]]*)?\]\s*\{(.*?)\};", text, re.S):
+        n = int(m.group(1))
+        body = m.group(2)
+        line = lines[text[: m.start()].count("\n")][0]
+        loc = Loc(path, line, 1)
+        if "GP2" in body:
+            raise error(loc, "positions of several motion groups are not supported")
+        pos = Position()
+        uf = re.search(r"UF\s*:\s*(\d+)", body)
+        ut = re.search(r"UT\s*:\s*(\d+)", body)
+        pos["uf"] = int(uf.group(1)) if uf else 0
+        pos["ut"] = int(ut.group(1)) if ut else 0
+        conf = re.search(r"CONFIG\s*:\s*'([^']*)'", body)
+        for k, v in _FIELD.findall(body):
+            pos[k] = float(v)
+        if conf:
+            parts = [s.strip() for s in conf.group(1).split(",")]
+            flags = " ".join(parts[0].split())
+            if not re.fullmatch(r"[NF] [UD] [TB]", flags) or len(parts) != 4:
+                raise error(loc, f"CONFIG '{conf.group(1)}' is not 'N|F U|D T|B, t4, t5, t6'")
+            try:
+                pos["config"] = (flags, *(int(x) for x in parts[1:]))
+            except ValueError as exc:
+                raise error(
+                    loc, f"CONFIG '{conf.group(1)}' has a turn number that is not whole"
+                ) from exc
+        cart = all(k in pos for k in "XYZWPR")
+        joint = "J1" in pos
+        if cart == joint:
+            raise error(loc, f"P[{n}] must have X, Y, Z, W, P, R or J1 ... J6")
+        out[n] = pos
+    return out
+
+
+class FanucReader:
+    """Reads one LS program (module doc)."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self.code = Code("MAIN")
+
+    def read(self, text: str) -> None:
+        sections: dict[str, list[tuple[int, str]]] = {}
+        current = None
+        for i, line in enumerate(text.splitlines(), 1):
+            s = line.strip()
+            if s.startswith("/"):
+                current = s.split()[0].upper()
+                sections.setdefault(current, [])
+                if current not in ("/PROG", "/ATTR", "/APPL", "/MN", "/POS", "/END"):
+                    raise error(Loc(self.path, i, 1), f"unknown section {current}")
+                continue
+            if current is None and s:
+                raise error(Loc(self.path, i, 1), "expected /PROG")
+            if current is not None:
+                sections[current].append((i, line))
+        if "/PROG" not in sections or "/MN" not in sections:
+            raise error(Loc(self.path, 1, 1), "an LS program needs /PROG and /MN")
+        self.positions = _positions(sections.get("/POS", []), self.path)
+        statements: list[list[Token]] = []
+        for i, line in sections["/MN"]:
+            if not line.strip():
+                continue
+            m, c = _MN.match(line), _CONT.match(line)
+            if m is None and c is None:
+                raise error(Loc(self.path, i, 1), "expected a numbered line 'n:  ... ;'")
+            body = (m or c).group(2 if m else 1)  # type: ignore[union-attr]
+            col = line.index(body) + 1
+            stripped = body.rstrip()
+            if (
+                not stripped.endswith(";")
+                and m is not None
+                and not stripped.lstrip().startswith(("C ", "C\t"))
+            ):
+                raise error(
+                    Loc(self.path, i, col + len(stripped)), "expected ';' at the end of the line"
+                )
+            if stripped.endswith(";"):
+                stripped = stripped[:-1]
+            if stripped.lstrip().startswith("!") or stripped.lstrip().startswith("//"):
+                continue
+            toks = tokenize(" " * (col - 1) + stripped, self.path, RULES)[:-1]
+            toks = [Token(t.kind, t.text, Loc(self.path, i, t.loc.col)) for t in toks]
+            if c is not None:
+                if not statements:
+                    raise error(Loc(self.path, i, 1), "a continuation line without a statement")
+                statements[-1].extend(toks)
+            elif toks:
+                statements.append(toks)
+        self.stack: list[tuple[str, Any]] = []
+        for toks in statements:
+            end = Loc(self.path, toks[-1].loc.line, toks[-1].loc.col + len(toks[-1].text))
+            p = Parser([*toks, Token("eof", "", end)], "FANUC TP")
+            self.p = p
+            self.ex = ExprParser(p, BINARY, UNARY, self.primary)
+            self.statement()
+        if self.stack:
+            kind, loc = self.stack[-1]
+            raise error(loc, f"{kind} without its end")
+
+    # ------------------------------------------------------------------ statements
+    def statement(self) -> None:
+        p, code = self.p, self.code
+        t = p.tok
+        u = t.upper
+        if u in ("J", "L", "C"):
+            self.motion()
+        elif u == "WAIT":
+            p.next()
+            if p.at("DI", "RI"):
+                io = p.next()
+                n, name = _ref(p.expect_kind("ref", "an I/O number [n]"))
+                p.expect("=")
+                v = p.expect_kind("id", "ON or OFF").upper
+                if v not in ("ON", "OFF"):
+                    raise p.fail("expected ON or OFF")
+                if p.tok.kind != "eof":
+                    raise p.unsupported("WAIT with TIMEOUT")
+                code.do(
+                    t.loc,
+                    lambda vm: vm.motion.wait_input(n, name or _name(vm, n, io.upper), v == "ON"),
+                )
+            else:
+                secs = self.ex.parse()
+                if p.tok.kind == "unit" and p.tok.text == "sec":
+                    p.next()
+                elif p.accept("("):
+                    p.expect("sec")
+                    p.expect(")")
+                self.done()
+                code.do(t.loc, lambda vm: vm.motion.dwell(_seconds(secs(vm))))
+        elif u in ("DO", "RO"):
+            p.next()
+            n, name = _ref(p.expect_kind("ref", "an output number [n]"))
+            p.expect("=")
+            v = p.expect_kind("id", "ON or OFF").upper
+            if v not in ("ON", "OFF"):
+                raise p.unsupported(f"{u}[...]={v}")
+            self.done()
+            code.do(
+                t.loc, lambda vm: vm.motion.set_output(n, name or _name(vm, n, "DO"), v == "ON")
+            )
+        elif u == "LBL":
+            p.next()
+            n, _ = _ref(p.expect_kind("ref", "a label number"))
+            self.done()
+            code.place(f"LBL{n}", t.loc)
+        elif u == "JMP":
+            p.next()
+            p.expect("LBL")
+            n, _ = _ref(p.expect_kind("ref", "a label number"))
+            self.done()
+            code.jump(t.loc, f"LBL{n}")
+        elif u == "IF":
+            self.if_()
+        elif u == "ELSE":
+            p.next()
+            self.done()
+            _kind, data = self.pop("IF", t)
+            other, done = data
+            code.jump(t.loc, done)
+            code.place(other)
+            self.stack.append(("ELSE", (None, done)))
+        elif u == "ENDIF":
+            p.next()
+            self.done()
+            _, (other, done) = self.pop(("IF", "ELSE"), t)
+            if other is not None:
+                code.place(other)
+            code.place(done)
+        elif u == "FOR":
+            self.for_()
+        elif u == "ENDFOR":
+            p.next()
+            self.done()
+            _, (reg, top, done, step) = self.pop("FOR", t)
+            code.do(t.loc, lambda vm: _set_r(vm, reg, number(_r(vm, reg)) + step))
+            code.jump(t.loc, top)
+            code.place(done)
+        elif u in ("UFRAME_NUM", "UTOOL_NUM"):
+            p.next()
+            p.expect("=")
+            v = self.ex.parse()
+            self.done()
+            key = "uf" if u == "UFRAME_NUM" else "ut"
+            code.do(t.loc, lambda vm: _set_frame_number(vm, key, v(vm)))
+        elif u in ("UFRAME", "UTOOL") and p.peek().kind == "ref":
+            p.next()
+            n, _ = _ref(p.next())
+            p.expect("=")
+            src = self.primary()
+            self.done()
+            key = "uframes" if u == "UFRAME" else "utools"
+            code.do(t.loc, lambda vm: _define_frame(vm, key, n, src(vm)))
+        elif u == "OVERRIDE":
+            p.next()
+            p.expect("=")
+            v = self.ex.parse()
+            p.expect("%")
+            self.done()
+            code.do(t.loc, lambda vm: _override(vm, v(vm)))
+        elif u in ("R", "PR") and p.peek().kind in ("ref", "ref2"):
+            self.assignment()
+        elif u == "END":
+            p.next()
+            self.done()
+            code.ret(t.loc)
+        else:
+            raise p.unsupported(f"the statement {t.text}")
+
+    def done(self) -> None:
+        if self.p.tok.kind != "eof":
+            raise self.p.fail("expected the end of the statement")
+
+    def pop(self, kinds: Any, t: Token) -> tuple[str, Any]:
+        kinds = (kinds,) if isinstance(kinds, str) else kinds
+        if not self.stack or self.stack[-1][0] not in kinds:
+            raise error(t.loc, f"{t.text} without {' or '.join(kinds)}")
+        return self.stack.pop()
+
+    def assignment(self) -> None:
+        p = self.p
+        t = p.next()
+        r = p.next()
+        p.expect("=")
+        value = self.ex.parse()
+        self.done()
+        if t.upper == "R":
+            n, _ = _ref(r)
+            if r.kind == "ref2":
+                raise error(r.loc, "R[n,i] is not a register")
+            self.code.do(t.loc, lambda vm: _set_r(vm, n, number(value(vm), "R[...]")))
+        elif r.kind == "ref2":
+            n, i = (int(x) for x in r.text[1:-1].split(","))
+            self.code.do(t.loc, lambda vm: _set_pr_element(vm, n, i, value(vm)))
+        else:
+            n, _ = _ref(r)
+            self.code.do(t.loc, lambda vm: _set_pr(vm, n, value(vm)))
+
+    def if_(self) -> None:
+        p, code = self.p, self.code
+        t = p.next()
+        if p.at("(") and self._then():
+            cond = self.ex.parse()
+            p.expect("THEN")
+            self.done()
+            other, done = code.new_label(), code.new_label()
+            code.unless(t.loc, cond, other)
+            self.stack.append(("IF", (other, done)))
+            return
+        cond = self.ex.parse()
+        p.expect(",", "',' and JMP LBL[n]")
+        if p.accept("JMP"):
+            p.expect("LBL")
+            n, _ = _ref(p.expect_kind("ref", "a label number"))
+            self.done()
+            skip = code.new_label()
+            code.unless(t.loc, cond, skip)
+            code.jump(t.loc, f"LBL{n}")
+            code.place(skip)
+            return
+        raise p.unsupported("IF ..., <action> other than JMP LBL[n]")
+
+    def _then(self) -> bool:
+        return any(tok.upper == "THEN" for tok in self.p.toks)
+
+    def for_(self) -> None:
+        p, code = self.p, self.code
+        t = p.next()
+        p.expect("R")
+        reg, _ = _ref(p.expect_kind("ref", "a register R[n]"))
+        p.expect("=")
+        start = self.ex.parse()
+        d = p.next()
+        if d.upper not in ("TO", "DOWNTO"):
+            raise p.fail("expected TO or DOWNTO", d)
+        stop = self.ex.parse()
+        self.done()
+        step = 1 if d.upper == "TO" else -1
+        top, done = code.new_label(), code.new_label()
+        code.do(t.loc, lambda vm: _set_r(vm, reg, number(start(vm), "the FOR start")))
+        code.place(top)
+        code.unless(
+            t.loc,
+            lambda vm: (
+                (number(_r(vm, reg)) <= number(stop(vm)))
+                if step > 0
+                else (number(_r(vm, reg)) >= number(stop(vm)))
+            ),
+            done,
+        )
+        self.stack.append(("FOR", (reg, top, done, step)))
+
+    def motion(self) -> None:
+        p = self.p
+        t = p.next()
+        kind = t.upper
+        via = None
+        target = self.target()
+        if kind == "C":
+            via, target = target, self.target()
+        speed: Fn = self.ex.parse()
+        unit = p.tok
+        if unit.text == "%":
+            p.next()
+            unit_text = "%"
+        elif unit.kind == "unit":
+            p.next()
+            unit_text = unit.text
+        else:
+            raise p.fail("expected a speed unit (%, mm/sec, cm/min, inch/min)")
+        if (kind == "J") != (unit_text == "%"):
+            raise p.unsupported(f"{kind} at a speed in {unit_text}", unit)
+        term = p.next()
+        if term.upper == "FINE":
+            cnt: Fn = lambda vm: 0.0  # noqa: E731
+        elif term.upper.startswith("CNT"):
+            rest = term.text[3:]
+            if rest:
+                v = float(rest)
+                cnt = lambda vm: v  # noqa: E731
+            else:
+                cnt = self.ex.parse()
+        else:
+            raise p.unsupported(f"the termination {term.text}", term)
+        acc: Fn | None = None
+        offset: Fn | None = None
+        while p.tok.kind != "eof":
+            o = p.next()
+            if o.upper.startswith("ACC"):
+                rest = o.text[3:]
+                acc = _constant(float(rest)) if rest else self.ex.parse()
+            elif o.upper == "OFFSET":
+                p.expect(",", "',PR[n]'")
+                offset = self.primary()
+            else:
+                raise p.unsupported(f"the motion option {o.text}", o)
+        self.code.do(
+            t.loc, lambda vm: _move(vm, kind, target, via, speed, unit_text, cnt, acc, offset)
+        )
+
+    def target(self) -> Any:
+        p = self.p
+        t = p.next()
+        if t.upper not in ("P", "PR") or p.tok.kind != "ref":
+            raise p.fail("expected P[n] or PR[n]", t)
+        n, _ = _ref(p.next())
+        if t.upper == "P":
+            if n not in self.positions:
+                raise error(t.loc, f"P[{n}] is not in /POS")
+            pos = self.positions[n]
+            return ("P", n, pos)
+        return ("PR", n, None)
+
+    # ------------------------------------------------------------------ expressions
+    def primary(self) -> Fn:
+        p = self.p
+        t = p.next()
+        if t.kind == "num":
+            v = float(t.text)
+            return lambda vm: v
+        if t.text == "(":
+            inner = self.ex.parse()
+            p.expect(")")
+            return inner
+        u = t.upper
+        if u in ("ON", "OFF"):
+            return lambda vm: u == "ON"
+        if u == "R" and p.tok.kind == "ref":
+            n, _ = _ref(p.next())
+            return lambda vm: _r(vm, n)
+        if u == "PR" and p.tok.kind == "ref2":
+            n, i = (int(x) for x in p.next().text[1:-1].split(","))
+            return lambda vm: _pr_element(vm, n, i)
+        if u == "PR" and p.tok.kind == "ref":
+            n, _ = _ref(p.next())
+            return lambda vm: _pr(vm, n)
+        if u == "P" and p.tok.kind == "ref":
+            n, _ = _ref(p.next())
+            if n not in self.positions:
+                raise error(t.loc, f"P[{n}] is not in /POS")
+            pos = self.positions[n]
+            return lambda vm: Position(pos)
+        if u in ("DI", "RI", "DO", "RO") and p.tok.kind == "ref":
+            n, name = _ref(p.next())
+            return lambda vm: _io(vm, u, n, name)
+        if u in ("LPOS", "JPOS"):
+            return lambda vm: _current(vm, u)
+        raise p.fail("expected a value", t)
+
+
+BINARY: dict[str, tuple[int, Any]] = {
+    "OR": (1, lambda a, b: boolean(a, "OR") or boolean(b, "OR")),
+    "AND": (2, lambda a, b: boolean(a, "AND") and boolean(b, "AND")),
+    "=": (3, lambda a, b: COMPARE["="](a, b)), "<>": (3, COMPARE["<>"]),
+    "<": (3, COMPARE["<"]), ">": (3, COMPARE[">"]), "<=": (3, COMPARE["<="]),
+    ">=": (3, COMPARE[">="]),
+    "+": (4, lambda a, b: _plus(a, b, 1.0)), "-": (4, lambda a, b: _plus(a, b, -1.0)),
+    "*": (5, ARITH["*"]), "/": (5, ARITH["/"]),
+}  # fmt: skip
+UNARY: dict[str, tuple[int, Any]] = {
+    "-": (6, lambda a: -number(a)),
+    "!": (6, lambda a: not boolean(a, "!")),
+}
+_CART = ("X", "Y", "Z", "W", "P", "R")
+
+
+def _constant(v: float) -> Fn:
+    return lambda vm: v
+
+
+def _plus(a: Any, b: Any, sign: float) -> Any:
+    if isinstance(a, Position) and isinstance(b, Position):
+        keys = _CART if "X" in a else tuple(k for k in a if k.startswith("J"))
+        out = Position(a)
+        for k in keys:
+            if k not in b:
+                raise ProgramError("adding a joint and a Cartesian position")
+            out[k] = a[k] + sign * b[k]
+        return out
+    return ARITH["+" if sign > 0 else "-"](a, b)
+
+
+def _name(vm: VM, n: int, kind: str) -> str:
+    names = vm.program.outputs if kind in ("DO", "RO") else vm.program.inputs
+    return names.get(n, "")
+
+
+def _io(vm: VM, kind: str, n: int, name: str) -> bool:
+    if kind in ("DO", "RO"):
+        return vm.motion.outputs.get(n, False)
+    return vm.motion.input(n, name or _name(vm, n, kind))
+
+
+def _seconds(v: Any) -> float:
+    s = number(v, "WAIT's seconds")
+    if s < 0:
+        raise ProgramError(f"WAIT needs seconds >= 0, got {s:g}")
+    return s
+
+
+def _r(vm: VM, n: int) -> float:
+    return vm.lang.setdefault("R", {}).get(n, 0.0)
+
+
+def _set_r(vm: VM, n: int, v: float) -> None:
+    vm.lang.setdefault("R", {})[n] = v
+
+
+def _pr(vm: VM, n: int) -> Position:
+    pr = vm.lang.setdefault("PR", {})
+    if n not in pr:
+        raise ProgramError(f"PR[{n}] has no value (position registers are set on the controller)")
+    return Position(pr[n])
+
+
+def _set_pr(vm: VM, n: int, v: Any) -> None:
+    if not isinstance(v, Position):
+        raise ProgramError("a position register takes a position")
+    vm.lang.setdefault("PR", {})[n] = Position(v)
+
+
+def _element_key(pos: Position, i: int) -> str:
+    keys = _CART if "X" in pos else tuple(f"J{k}" for k in range(1, 10) if f"J{k}" in pos)
+    if not 1 <= i <= len(keys):
+        raise ProgramError(f"element {i} is outside 1 to {len(keys)}")
+    return keys[i - 1]
+
+
+def _pr_element(vm: VM, n: int, i: int) -> float:
+    pos = _pr(vm, n)
+    return float(pos[_element_key(pos, i)])
+
+
+def _set_pr_element(vm: VM, n: int, i: int, v: Any) -> None:
+    pr = vm.lang.setdefault("PR", {})
+    pos = pr.setdefault(n, Position({k: 0.0 for k in _CART} | {"uf": 0, "ut": 0}))
+    pos[_element_key(pos, i)] = number(v, f"PR[{n},{i}]")
+
+
+def _matrix(pos: Position) -> np.ndarray:
+    T = from_zyx(pos["R"], pos["P"], pos["W"])
+    T[:3, 3] = [pos["X"] / 1000.0, pos["Y"] / 1000.0, pos["Z"] / 1000.0]
+    return T
+
+
+def _current(vm: VM, which: str) -> Position:
+    m = vm.motion
+    q = m.joints()
+    if which == "JPOS":
+        j = np.degrees(fanuc_from_joints(m.model, q))
+        return Position({f"J{i + 1}": float(v) for i, v in enumerate(j)})
+    T = m.program_pose(q)
+    w, pp, r = wpr(T)
+    flags, *turns = fanuc_config(m.model, q)
+    out = Position(
+        {"X": 1000 * T[0, 3], "Y": 1000 * T[1, 3], "Z": 1000 * T[2, 3], "W": w, "P": pp, "R": r}
+    )
+    out["config"] = (flags, *turns)
+    out["uf"], out["ut"] = vm.lang.get("uf", 0), vm.lang.get("ut", 0)
+    return out
+
+
+def _set_frame_number(vm: VM, key: str, v: Any) -> None:
+    n = number(v, key)
+    if n != int(n) or n < 0:
+        raise ProgramError(f"a frame number must be a whole number >= 0, got {n:g}")
+    vm.lang[key] = int(n)
+    _apply_frames(vm)
+
+
+def _define_frame(vm: VM, key: str, n: int, v: Any) -> None:
+    if not isinstance(v, Position) or "X" not in v:
+        raise ProgramError("a frame takes a Cartesian position")
+    vm.lang.setdefault(key, {})[n] = _matrix(v)
+    _apply_frames(vm)
+
+
+def _apply_frames(vm: VM) -> None:
+    m = vm.motion
+    uf, ut = vm.lang.get("uf", 0), vm.lang.get("ut", 0)
+    m.base = vm.lang.get("uframes", {}).get(uf, np.eye(4)) if uf else np.eye(4)
+    tools = vm.lang.get("utools", {})
+    m.tcp = np.eye(4) if ut == 0 else tools.get(ut)
+
+
+def _override(vm: VM, v: Any) -> None:
+    x = number(v, "OVERRIDE")
+    if not 0 < x <= 100:
+        raise ProgramError(f"OVERRIDE must be in (0, 100] %, got {x:g}")
+    vm.lang["ov"] = x / 100.0
+
+
+def _resolve(vm: VM, target: Any) -> Position:
+    kind, n, pos = target
+    if kind == "PR":
+        return _pr(vm, n)
+    uf, ut = vm.lang.get("uf", 0), vm.lang.get("ut", 0)
+    if (pos["uf"], pos["ut"]) != (uf, ut) and "X" in pos:
+        raise ProgramError(
+            f"P[{n}] was taught in UF {pos['uf']}, UT {pos['ut']}; the active frames are UF "
+            f"{uf}, UT {ut}"
+        )
+    return Position(pos)
+
+
+def _move(vm: VM, kind: str, target: Any, via: Any, speed: Fn, unit: str, cnt: Fn, acc: Fn | None,
+          offset: Fn | None) -> None:  # fmt: skip
+    m = vm.motion
+    _apply_frames(vm)
+    m.trapezoid = None
+    m.override = vm.lang.get("ov", 1.0)
+    zone = number(cnt(vm), "CNT") / 1000.0
+    if zone < 0 or zone > 0.1:
+        raise ProgramError(f"CNT must be in 0 to 100, got {zone * 1000:g}")
+    pos = _resolve(vm, target)
+    off = None
+    if offset is not None:
+        o = offset(vm)
+        if not isinstance(o, Position) or "X" not in o:
+            raise ProgramError("Offset takes a Cartesian position register")
+        off = _matrix(o)
+    v = number(speed(vm), "the speed")
+    if v <= 0:
+        raise ProgramError("the speed must be > 0")
+    if kind == "J":
+        if v > 100:
+            raise ProgramError(f"a joint speed is at most 100 %, got {v:g}")
+        m.joint_fraction = v / 100.0
+        if "J1" in pos:
+            if off is not None:
+                raise ProgramError("Offset applies to Cartesian positions")
+            j = np.radians([pos[f"J{i + 1}"] for i in range(len(m.joints()))])
+            m.move_joints(fanuc_to_joints(m.model, j), zone)
+            return
+        T = _matrix(pos) if off is None else off @ _matrix(pos)
+        if "config" in pos:
+            m.move_pose(T, zone, fanuc_config, pos["config"], f"{target[0]}[{target[1]}] (CONFIG)")
+        else:
+            m.move_pose(T, zone, None, None, f"{target[0]}[{target[1]}]")
+        return
+    scale = {"mm/sec": 1e-3, "cm/min": 1e-2 / 60.0, "inch/min": 0.0254 / 60.0}.get(unit)
+    if scale is None:
+        raise ProgramError(f"a speed in {unit} is not supported for {kind} by workcell's reader")
+    a = DEFAULT_TOOL_ACCELERATION * (1.0 if acc is None else number(acc(vm), "ACC") / 100.0)
+    if a <= 0:
+        raise ProgramError("ACC must be > 0")
+    if "J1" in pos:
+        raise ProgramError(f"{kind} to a joint position is not supported by workcell's reader")
+    T = _matrix(pos) if off is None else off @ _matrix(pos)
+    if kind == "L":
+        m.move_linear(T, v * scale, a, zone)
+        return
+    vpos = _resolve(vm, via)
+    if "J1" in vpos:
+        raise ProgramError("the via point of C must be Cartesian")
+    m.move_circular(_matrix(vpos), T, v * scale, a, zone)
+
+
+def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotProgram:
+    """Read an LS program as a :class:`RobotProgram`."""
+    r = FanucReader(str(path))
+    r.read(path.read_text(encoding="utf-8", errors="replace"))
+    routine = r.code.finish()
+    return RobotProgram(str(path), "fanuc_ls", {"MAIN": routine}, "MAIN", [], inputs, outputs)
