@@ -29,6 +29,9 @@ whose vendor configuration is the given one (nearest the current joints when the
 leaves joints unnamed, e.g. FANUC J1-J3 turns). FANUC joint values: the controller's J3
 is measured from the horizontal, J3_fanuc = J3 - J2 on the LR Mate 200iD (the
 ROS-Industrial driver's J23_factor = 1: J3_ros = J3_fanuc + J2_fanuc).
+
+A joint within 1e-9 rad of a boundary counts as on it (0 is positive, a quadrant or turn
+starts at its lower edge), so rounding in the last digits never changes a bit.
 """
 
 from __future__ import annotations
@@ -59,6 +62,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 _TWO_PI = 2.0 * math.pi
+EPS = 1e-9  # rad: a joint this close to a boundary (0, a quadrant, +-180) counts as on it
 
 
 def letters(robot: Robot, q: ArrayLike) -> str | None:
@@ -85,8 +89,8 @@ def kuka_status_turn(robot: Robot, q: ArrayLike) -> tuple[int, int]:
     """KUKA's Status and Turn of joint values q (rad), module doc."""
     v = np.asarray(q, dtype=np.float64)
     c = letters(robot, v) or "ru"
-    s = (c[0] == "l") | _arm_up(robot, v, c) << 1 | (math.sin(float(v[4])) <= 0.0) << 2
-    t = sum(1 << i for i in range(min(6, len(v))) if v[i] < 0.0)
+    s = (c[0] == "l") | _arm_up(robot, v, c) << 1 | (math.sin(float(v[4])) < EPS) << 2
+    t = sum(1 << i for i in range(min(6, len(v))) if v[i] < -EPS)
     return int(s), int(t)
 
 
@@ -96,9 +100,9 @@ def abb_confdata(robot: Robot, q: ArrayLike) -> tuple[int, int, int, int]:
     c = letters(robot, v) or "ru"
 
     def quadrant(a: float) -> int:
-        return math.floor(math.degrees(a) / 90.0 + 1e-12)
+        return math.floor((a + EPS) / (0.5 * math.pi))
 
-    cfx = 4 * (c[0] == "l") + 2 * (not _arm_up(robot, v, c)) + (float(v[4]) < 0.0)
+    cfx = 4 * (c[0] == "l") + 2 * (not _arm_up(robot, v, c)) + (float(v[4]) < -EPS)
     return quadrant(float(v[0])), quadrant(float(v[3])), quadrant(float(v[5])), int(cfx)
 
 
@@ -123,7 +127,7 @@ def fanuc_to_joints(robot: Robot, j: ArrayLike) -> Array:
 
 
 def _turn(a: float) -> int:
-    return math.floor((math.degrees(a) + 180.0) / 360.0 + 1e-12)
+    return math.floor((a + math.pi + EPS) / _TWO_PI)
 
 
 def fanuc_config(robot: Robot, q: ArrayLike) -> tuple[str, int, int, int]:
