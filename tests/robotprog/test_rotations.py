@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from progframes import Rx, Ry, Rz, quat_matrix, rodrigues
 
 from workcell.robotprog.fanuc import wpr
 from workcell.robotprog.rotations import (
@@ -21,42 +22,6 @@ from workcell.robotprog.rotations import (
     to_kuka_frame,
     zyx,
 )
-
-
-def Rx(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
-
-
-def Ry(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-
-
-def Rz(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
-
-
-def rodrigues(v: np.ndarray) -> np.ndarray:
-    """R = I + sin(t) K + (1 - cos(t)) K^2, K the cross matrix of the unit axis."""
-    t = float(np.linalg.norm(v))
-    if t == 0:
-        return np.eye(3)
-    k = v / t
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(t) * K + (1 - math.cos(t)) * K @ K
-
-
-def quat_matrix(w: float, x: float, y: float, z: float) -> np.ndarray:
-    """The textbook rotation matrix of a unit quaternion (Hamilton, w first)."""
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 def random_rotation(rng: np.random.Generator) -> np.ndarray:
