@@ -122,7 +122,7 @@ def test_fanuc_ls_program() -> None:
     for got, want in zip(poses[1:], expect, strict=True):
         _close(got, want)
     # the arc went through P[3]: some frame of the move passes within 1 mm of it
-    t, Q = sim.trajectory("r")
+    _, Q = sim.trajectory("r")
     robot = sim.cell.robots["r"].robot
     pts = (robot.fk_batch(Q) @ tcp)[:, :3, 3]
     assert np.min(np.linalg.norm(pts - [0.48, 0.0, 0.35], axis=1)) < 1e-3

@@ -206,9 +206,10 @@ class FanucReader:
             p.next()
             n, name = _ref(p.expect_kind("ref", "an output number [n]"))
             p.expect("=")
-            v = p.expect_kind("id", "ON or OFF").upper
+            vt = p.expect_kind("id", "ON or OFF")
+            v = vt.upper
             if v not in ("ON", "OFF"):
-                raise p.unsupported(f"{u}[...]={v}")
+                raise p.unsupported(f"{u}[...]={vt.text}", vt)
             self.done()
             code.do(
                 t.loc, lambda vm: vm.motion.set_output(n, name or _name(vm, n, "DO"), v == "ON")
@@ -382,7 +383,7 @@ class FanucReader:
             unit_text = unit.text
         else:
             raise p.fail("expected a speed unit (%, mm/sec, cm/min, inch/min)")
-        if (kind == "J") != (unit_text == "%"):
+        if (kind == "J") != (unit_text == "%") or unit_text in ("sec", "msec", "deg/sec"):
             raise p.unsupported(f"{kind} at a speed in {unit_text}", unit)
         term = p.next()
         if term.upper == "FINE":

@@ -46,7 +46,7 @@ from workcell.robotprog.kuka_values import (
     program_pose,
     tcp_of_tool,
 )
-from workcell.robotprog.runtime import VM, Code, RobotProgram
+from workcell.robotprog.runtime import VM, Code, RobotProgram, check_calls
 from workcell.robotprog.source import Loc, Parser, Token, error, tokenize
 
 __all__ = ["read"]
@@ -866,4 +866,5 @@ def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotPr
     for name, (kind, n) in r.signals.items():
         (outputs if kind == "$OUT" else inputs).setdefault(n, name.lower())
     routines = {k: c.finish() for k, c in r.routines.items()}
+    check_calls(routines, "KRL")
     return RobotProgram(str(path), "krl", routines, r.main, r.setup, inputs, outputs)

@@ -35,7 +35,7 @@ from workcell.errors import ProgramError
 from workcell.robotprog.configs import abb_confdata
 from workcell.robotprog.exprs import ARITH, COMPARE, ExprParser, Fn, boolean, number
 from workcell.robotprog.rotations import quat_wxyz
-from workcell.robotprog.runtime import VM, Code, RobotProgram
+from workcell.robotprog.runtime import VM, Code, RobotProgram, check_calls
 from workcell.robotprog.source import Loc, Parser, Token, error, tokenize
 from workcell.spatial import matrix_from_quat, translation
 
@@ -136,6 +136,7 @@ class RapidReader:
         self.routines: dict[str, Code] = {}
         self.setup: list[Any] = [_setup]
         self.first: str | None = None
+        self.signals: set[str] = set()
 
     def read(self, text: str) -> None:
         p = Parser(tokenize(text, self.path, RULES), "RAPID")
@@ -327,7 +328,8 @@ class RapidReader:
                     opts[o] = self.ex.parse()
             else:
                 args.append(self.ex.parse())
-            p.accept(",")
+            if not p.accept(",") and not p.at(";"):
+                raise p.fail("expected ',' or ';'")
         p.next()
         n_args, allowed = INSTRUCTIONS[u]
         if len(args) != n_args:
@@ -431,9 +433,11 @@ class RapidReader:
             return lambda vm: u == "TRUE"
         if p.at("("):
             return self.function(t)
-        if u not in self.types:  # I/O signals live in the controller's configuration
-            sig = t.text
-            return lambda vm: _dinput(vm, sig)
+        if u not in self.types:
+            if t.text.lower() in self.signals:  # a signal the file's header lists
+                sig = t.text
+                return lambda vm: _dinput(vm, sig)
+            raise error(t.loc, f"{t.text} is not declared (nor a signal the file's header lists)")
 
         def var(vm: VM) -> Any:
             if u in vm.vars:
@@ -698,10 +702,12 @@ def args_name(vm: VM, v: Any) -> str:
 def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotProgram:
     """Read a RAPID module as a :class:`RobotProgram`."""
     r = RapidReader(str(path))
+    r.signals = {s.lower() for s in (*outputs.values(), *inputs.values())}
     text = path.read_text(encoding="utf-8", errors="replace")
     r.read(text)
     if not r.routines:
         raise error(Loc(str(path), 1, 1), "no PROC in the module")
     main = "MAIN" if "MAIN" in r.routines else r.first
     routines = {k: c.finish() for k, c in r.routines.items()}
+    check_calls(routines, "RAPID")
     return RobotProgram(str(path), "rapid", routines, main or "", r.setup, inputs, outputs)

@@ -30,7 +30,7 @@ import numpy as np
 from workcell.errors import ProgramError
 from workcell.robotprog.exprs import ARITH, COMPARE, ExprParser, Fn, boolean, number
 from workcell.robotprog.rotations import from_rotvec, rotvec
-from workcell.robotprog.runtime import VM, Code, RobotProgram
+from workcell.robotprog.runtime import VM, Code, RobotProgram, check_calls
 from workcell.robotprog.source import Loc, Parser, Token, error, tokenize
 from workcell.spatial import invert
 
@@ -562,4 +562,5 @@ def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotPr
     r = UrReader(str(path))
     main = r.read(path.read_text(encoding="utf-8", errors="replace"))
     routines = {k: c.finish() for k, c in r.routines.items()}
+    check_calls(routines, "URScript")
     return RobotProgram(str(path), "urscript", routines, main, [], inputs, outputs)

@@ -115,6 +115,19 @@ class Code:
         return Routine(self.name, self.ops)
 
 
+def check_calls(routines: dict[str, Routine], language: str) -> None:
+    """Every call names a routine of the file: ProgramError at the call otherwise."""
+    for r in routines.values():
+        for op in r.ops:
+            if op.kind == "call" and op.target not in routines:
+                mine = ", ".join(k for k in sorted(routines) if not k.startswith("#")) or "none"
+                raise error(
+                    op.loc,
+                    f"{op.target} is not supported by workcell's {language} reader and is not "
+                    f"a routine of this file (its routines: {mine})",
+                )
+
+
 @dataclass
 class RobotProgram:
     """A program read from ``path`` in ``language``: its ``routines`` by name (upper case
