@@ -96,7 +96,7 @@ CASES = [
         + "   1:  UTOOL_NUM=1 ;\n   2:  L P[1] 100sec FINE ;\n/POS\nP[1]{\n GP1:\n UF : 0, UT : 1,\n"
         " X = 1 mm, Y = 2 mm, Z = 3 mm, W = 0 deg, P = 0 deg, R = 0 deg\n};\n/END\n",
         5,
-        19,
+        18,
         "not supported",
     ),
     (
