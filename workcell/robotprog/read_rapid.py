@@ -328,7 +328,7 @@ class RapidReader:
                     opts[o] = self.ex.parse()
             else:
                 args.append(self.ex.parse())
-            if not p.accept(",") and not p.at(";"):
+            if not p.accept(",") and not p.at(";", "\\"):
                 raise p.fail("expected ',' or ';'")
         p.next()
         n_args, allowed = INSTRUCTIONS[u]

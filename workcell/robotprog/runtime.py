@@ -261,7 +261,7 @@ class Executor:
         if not 0.0 < f <= 1.0 + 1e-12:
             raise ProgramError(f"the speed override must be in (0, 100] %, got {100 * f:.6g} %")
         f = min(f, 1.0)
-        if abs(self.sim.override(self.robot) - f) > 1e-12:
+        if abs(self.sim._override[self.robot] - f) > 1e-12:
             self.sim.set_override(self.robot, f)
 
     def _joint_timing(self) -> None:

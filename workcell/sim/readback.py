@@ -56,10 +56,6 @@ class ReadBack:
         T[:3, 3] = self.data.site_xpos[i]
         return T
 
-    def override(self: Simulator, robot: str) -> float:
-        """The robot's speed override f (``set_override``), 0 < f <= 1."""
-        return self._override[self._robot(robot)]
-
     def speed(self: Simulator, robot: str) -> float:
         """The robot's speed (rad/s): the speed of the joint that moves most."""
         return self._speed[self._robot(robot)]
