@@ -175,9 +175,10 @@ def tcp_of(robot: Robot) -> Array:
 
 
 def _records(sim: Any, robot: str) -> list[dict[str, Any]]:
+    """The robot's command records and the cell's waits, in order of their start."""
     recs = [e.data for e in sim.events if e.data is not None and "program" in e.data]
     order = sorted(range(len(recs)), key=lambda i: (recs[i]["t_start"], i))
-    return [recs[i] for i in order if recs[i]["robot"] == robot]
+    return [recs[i] for i in order if recs[i]["robot"] in (robot, None)]
 
 
 def _speed(p: Mapping[str, Any]) -> JointSpeed:
@@ -223,11 +224,16 @@ def from_sim(sim: Any, robot: str, *, signals: Mapping[str, int] | None = None) 
     out: list[Instruction] = []
     for rec in _records(sim, name):
         start, dur = float(rec["t_start"]), float(rec["duration_s"])
+        p = rec["program"]
+        kind = p["kind"]
+        if kind == "wait":  # the cell's clock: a dwell up to its end (with any gap before)
+            if start + dur > t + _GAP:
+                out.append(Wait(start + dur - t))
+            t = max(t, start + dur)
+            continue
         if start > t + _GAP:
             out.append(Wait(start - t))
         t = max(t, start + dur)
-        p = rec["program"]
-        kind = p["kind"]
         if kind == "joint":
             pose = None if p.get("pose") is None else _arr(p["pose"])
             out.append(MoveJoint(_arr(p["q"]), _speed(p), float(p["zone"]), pose, p.get("config")))
