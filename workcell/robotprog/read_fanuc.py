@@ -247,10 +247,8 @@ class FanucReader:
         elif u == "ENDFOR":
             p.next()
             self.done()
-            _, (reg, top, done, step) = self.pop("FOR", t)
-            code.do(t.loc, lambda vm: _set_r(vm, reg, number(_r(vm, reg)) + step))
-            code.jump(t.loc, top)
-            code.place(done)
+            _, (get, put, head) = self.pop("FOR", t)
+            code.for_close(t.loc, get, put, head)
         elif u in ("UFRAME_NUM", "UTOOL_NUM"):
             p.next()
             p.expect("=")
@@ -351,19 +349,15 @@ class FanucReader:
         stop = self.ex.parse()
         self.done()
         step = 1 if d.upper == "TO" else -1
-        top, done = code.new_label(), code.new_label()
-        code.do(t.loc, lambda vm: _set_r(vm, reg, number(start(vm), "the FOR start")))
-        code.place(top)
-        code.unless(
-            t.loc,
-            lambda vm: (
-                (number(_r(vm, reg)) <= number(stop(vm)))
-                if step > 0
-                else (number(_r(vm, reg)) >= number(stop(vm)))
-            ),
-            done,
-        )
-        self.stack.append(("FOR", (reg, top, done, step)))
+
+        def get(vm: VM) -> float:
+            return _r(vm, reg)
+
+        def put(vm: VM, v: float) -> None:
+            _set_r(vm, reg, v)
+
+        head = code.for_open(t.loc, get, put, start, stop, lambda vm: step)
+        self.stack.append(("FOR", (get, put, head)))
 
     def motion(self) -> None:
         p = self.p

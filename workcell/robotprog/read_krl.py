@@ -505,29 +505,18 @@ class KrlReader:
             if step_tok.kind not in ("num", "op"):
                 raise error(step_tok.loc, "STEP must be a constant")
         p.end_line()
-        top, done = code.new_label(), code.new_label()
 
-        def init(vm: VM) -> None:
-            vm.vars[var] = int(number(start(vm), "the FOR start"))
-            vm.lang[f"for:{t.loc}"] = (int(number(stop(vm), "TO")), int(number(step(vm), "STEP")))
-            if vm.lang[f"for:{t.loc}"][1] == 0:
-                raise ProgramError("STEP 0 would never end")
+        def get(vm: VM) -> Any:
+            return vm.vars[var]
 
-        def test(vm: VM) -> bool:
-            hi, st = vm.lang[f"for:{t.loc}"]
-            return vm.vars[var] <= hi if st > 0 else vm.vars[var] >= hi
+        def put(vm: VM, v: float) -> None:
+            vm.vars[var] = int(v)
 
-        code.do(t.loc, init)
-        code.place(top)
-        code.unless(t.loc, test, done)
-        self.block(code, {"ENDFOR"}, done)
+        head = code.for_open(t.loc, get, put, start, stop, step)
+        self.block(code, {"ENDFOR"}, head[2])
         end = p.next()
         p.end_line()
-        code.do(
-            end.loc, lambda vm: vm.vars.__setitem__(var, vm.vars[var] + vm.lang[f"for:{t.loc}"][1])
-        )
-        code.jump(end.loc, top)
-        code.place(done)
+        code.for_close(end.loc, get, put, head)
 
     def bas(self, code: Code) -> None:
         p = self.p

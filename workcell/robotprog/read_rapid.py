@@ -381,28 +381,17 @@ class RapidReader:
             step = self.ex.parse()
         p.expect("DO")
         self.types.setdefault(var, "num")
-        top, done = code.new_label(), code.new_label()
-        key = f"for:{t.loc}"
 
-        def init(vm: VM) -> None:
-            st = number(step(vm), "STEP")
-            if st == 0:
-                raise ProgramError("STEP 0 would never end")
-            vm.vars[var] = number(start(vm), "FROM")
-            vm.lang[key] = (number(stop(vm), "TO"), st)
+        def get(vm: VM) -> Any:
+            return vm.vars[var]
 
-        def test(vm: VM) -> bool:
-            hi, st = vm.lang[key]
-            return vm.vars[var] <= hi if st > 0 else vm.vars[var] >= hi
+        def put(vm: VM, v: float) -> None:
+            vm.vars[var] = v
 
-        code.do(t.loc, init)
-        code.place(top)
-        code.unless(t.loc, test, done)
+        head = code.for_open(t.loc, get, put, start, stop, step)
         self.block(code, {"ENDFOR"})
         end = p.next()
-        code.do(end.loc, lambda vm: vm.vars.__setitem__(var, vm.vars[var] + vm.lang[key][1]))
-        code.jump(end.loc, top)
-        code.place(done)
+        code.for_close(end.loc, get, put, head)
 
     # ------------------------------------------------------------------ expressions
     def primary(self) -> Fn:

@@ -105,6 +105,38 @@ class Code:
         if loc is not None:
             self._label_locs[label] = loc
 
+    def for_open(self, loc: Loc, get: Fn, put: Callable[[VM, float], None], start: Fn, stop: Fn,
+                 step: Fn) -> tuple[str, str, str]:  # fmt: skip
+        """The head of a counted loop (FOR): the counter (``get``/``put``) from ``start``
+        while it has not passed ``stop`` (checked before each pass) by ``step`` (not 0);
+        returns what :meth:`for_close` needs (the body comes between the two)."""
+        key, top, done = f"for:{loc}", self.new_label(), self.new_label()
+
+        def init(vm: VM) -> None:
+            st = _number(step(vm), "the loop's STEP")
+            if st == 0:
+                raise ProgramError("a loop with STEP 0 would never end")
+            put(vm, _number(start(vm), "the loop's start"))
+            vm.lang[key] = (_number(stop(vm), "the loop's end"), st)
+
+        def test(vm: VM) -> bool:
+            hi, st = vm.lang[key]
+            v = _number(get(vm), "the loop's counter")
+            return v <= hi if st > 0 else v >= hi
+
+        self.do(loc, init)
+        self.place(top)
+        self.unless(loc, test, done)
+        return key, top, done
+
+    def for_close(self, loc: Loc, get: Fn, put: Callable[[VM, float], None],
+                  head: tuple[str, str, str]) -> None:  # fmt: skip
+        """The end of a counted loop: the next value, back to the test."""
+        key, top, done = head
+        self.do(loc, lambda vm: put(vm, _number(get(vm), "the loop's counter") + vm.lang[key][1]))
+        self.jump(loc, top)
+        self.place(done)
+
     def finish(self) -> Routine:
         """The routine; a jump to a label never placed is a ProgramError at the jump."""
         for op in self.ops:
@@ -196,6 +228,12 @@ class VM:
                 self.call(op.target, op.loc, depth + 1)
             else:
                 return
+
+
+def _number(v: Any, what: str) -> float:
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise ProgramError(f"{what} must be a number, got {v!r}")
+    return float(v)
 
 
 def _truth(op: Op, v: Any) -> bool:
