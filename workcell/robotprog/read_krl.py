@@ -27,27 +27,31 @@ ProgramError at its place.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from workcell.errors import ProgramError
-from workcell.robotprog.configs import kuka_status_turn
-from workcell.robotprog.exprs import ARITH, COMPARE, ExprParser, Fn, boolean, number
+from workcell.robotprog.exprs import ExprParser, Fn, boolean, number
+from workcell.robotprog.krl_exprs import KrlExpressions
+from workcell.robotprog.krl_run import (
+    BINARY,
+    DEF_ACC_CP,
+    DEF_VEL_CP,
+    UNARY,
+    _bas,
+    _convert,
+    _index,
+    _io_name,
+    _move,
+    _seconds,
+    _wait_for,
+)
 from workcell.robotprog.kuka_values import (
     SIMPLE_TYPES,
     STRUCT_TYPES,
-    frame_matrix,
-    geometric,
-    joints_of,
-    pose_dict,
-    program_pose,
-    tcp_of_tool,
 )
 from workcell.robotprog.runtime import VM, Code, RobotProgram, check_calls
-from workcell.robotprog.source import Loc, Parser, Token, error, tokenize
+from workcell.robotprog.source import Loc, Parser, error, tokenize
 
 __all__ = ["read"]
 
@@ -64,12 +68,7 @@ RULES = [
     ("id", r"[A-Za-z_][A-Za-z0-9_]*"),
     ("op", r"==|<>|>=|<=|[-+*/(){}\[\],.:=<>]"),
 ]
-DEF_VEL_CP, DEF_ACC_CP = 2.0, 2.3  # m/s, m/s^2: BAS(#INITMOV) (workcell's choice)
-SETTINGS = {
-    "$VEL.CP": "vel_cp", "$ACC.CP": "acc_cp", "$OV_PRO": "ov", "$APO.CDIS": "cdis",
-    "$APO.CPTP": "cptp",
-}  # fmt: skip
-IGNORED = {"$VEL.ORI1", "$VEL.ORI2", "$ACC.ORI1", "$ACC.ORI2", "$ADVANCE", "$BWDSTART"}
+
 ENDS = {"END", "ENDIF", "ELSE", "ENDFOR", "ENDWHILE", "UNTIL", "ENDLOOP", "ENDDAT"}
 
 
@@ -80,7 +79,7 @@ def _setup(vm: VM) -> None:
     )  # fmt: skip
 
 
-class KrlReader:
+class KrlReader(KrlExpressions):
     """Reads one KRL program (module doc)."""
 
     def __init__(self, path: str) -> None:
@@ -352,53 +351,6 @@ class KrlReader:
 
         return set_var
 
-    def _system_setter(self, t: Token, name: str, index: Fn | None, fields: list[str]) -> Any:
-        full = name + "".join("." + f for f in fields)
-        if full in IGNORED:
-            return lambda vm, v: None
-        if full in SETTINGS:
-            key = SETTINGS[full]
-
-            def set_number(vm: VM, v: Any) -> None:
-                x = number(v, full)
-                if x < 0 or (key == "ov" and not 0 < x <= 100):
-                    raise ProgramError(f"{full} = {x:g} is out of range")
-                vm.lang[key] = x
-
-            return set_number
-        if full in ("$VEL_AXIS", "$ACC_AXIS") and index is not None:
-            key = full[1:].lower()
-
-            def set_axis(vm: VM, v: Any) -> None:
-                i = _index(vm.lang[key], index(vm), full, base=1)
-                x = number(v, full)
-                if not 0 < x <= 100:
-                    raise ProgramError(f"{full}[{i + 1}] must be in (0, 100] %, got {x:g}")
-                vm.lang[key][i] = x
-
-            return set_axis
-        if full == "$OUT" and index is not None:
-            return lambda vm, v: vm.motion.set_output(
-                int(number(index(vm))),
-                _io_name(vm, "$OUT", int(number(index(vm)))),
-                boolean(v, "$OUT"),
-            )
-        if full == "$TOOL":
-            return lambda vm, v: setattr(vm.motion, "tcp", None if v is None else tcp_of_tool(v))
-        if full == "$BASE":
-            return lambda vm, v: setattr(
-                vm.motion, "base", np.eye(4) if v is None else frame_matrix(v, "$BASE")
-            )
-        if full in ("$ORI_TYPE", "$CIRC_TYPE"):
-            ok = {"$ORI_TYPE": "#VAR", "$CIRC_TYPE": "#BASE"}[full]
-
-            def set_type(vm: VM, v: Any) -> None:
-                if v != ok:
-                    raise ProgramError(f"{full} = {v} is not supported (only {ok})")
-
-            return set_type
-        raise error(t.loc, f"the system variable {full} is not supported by workcell's KRL reader")
-
     # ------------------------------------------------------------------ motions and waits
     def motion(self, code: Code) -> None:
         p = self.p
@@ -533,310 +485,6 @@ class KrlReader:
         if what not in known:
             raise p.unsupported(f"BAS({what})", t)
         code.do(t.loc, lambda vm: _bas(vm, what, arg(vm)))
-
-    # ------------------------------------------------------------------ expressions
-    def primary(self) -> Fn:
-        p = self.p
-        t = p.next()
-        if t.kind == "num":
-            v = float(t.text) if any(c in t.text for c in ".eE") else int(t.text)
-            return self.postfix(lambda vm: v)
-        if t.kind == "bits":
-            base = 2 if t.text[1] in "Bb" else 16
-            v = int(t.text[2:-1], base)
-            return lambda vm: v
-        if t.kind == "str":
-            s = t.text[1:-1]
-            return lambda vm: s
-        if t.kind == "enum":
-            e = t.upper
-            return lambda vm: e
-        if t.text == "(":
-            inner = self.ex.parse()
-            p.expect(")")
-            return self.postfix(inner)
-        if t.text == "{":
-            return self.postfix(self.aggregate(t))
-        if t.kind == "sys":
-            return self.postfix(self.system(t))
-        if t.kind == "id":
-            u = t.upper
-            if u in ("TRUE", "FALSE"):
-                return lambda vm: u == "TRUE"
-            if u in self.signals:
-                kind, n = self.signals[u]
-                return lambda vm: _io_read(vm, kind, n, t.text)
-            if u in ("TOOL_DATA", "BASE_DATA") and u not in self.types:
-                p.expect("[")
-                self.ex.parse()
-                p.expect("]")
-                return lambda vm: None  # the controller's tables: the robot's own tool/base
-            if p.at("("):
-                raise p.unsupported(f"the function {t.text}()", t)
-
-            def var(vm: VM) -> Any:
-                if u not in vm.vars:
-                    raise error(t.loc, f"{t.text} is not declared")
-                if vm.vars[u] is None:
-                    raise error(t.loc, f"{t.text} is used before it has a value")
-                return vm.vars[u]
-
-            return self.postfix(var)
-        raise p.fail("expected a value", t)
-
-    def postfix(self, base: Fn) -> Fn:
-        p = self.p
-        while True:
-            t = p.tok
-            if t.text == "[":
-                p.next()
-                idx = self.ex.parse()
-                p.expect("]")
-                base = _element_of(base, idx, t)
-            elif t.text == ".":
-                p.next()
-                f = p.expect_kind("id", "a field name")
-                base = _field_of(base, f)
-            else:
-                return base
-
-    def aggregate(self, open_tok: Token) -> Fn:
-        p = self.p
-        typ = None
-        if p.tok.kind == "id" and p.peek().text == ":":
-            typ = p.next().upper
-            p.next()
-        items: list[tuple[str, Fn]] = []
-        while not p.at("}"):
-            f = p.expect_kind("id", "a field name").upper
-            value = self.aggregate(p.next()) if p.at("{") else self.ex.parse()
-            items.append((f, value))
-            if not p.accept(","):
-                break
-        p.expect("}")
-        del typ
-
-        def build(vm: VM) -> dict[str, Any]:
-            return {f: v(vm) for f, v in items}
-
-        return build
-
-    def system(self, t: Token) -> Fn:
-        p = self.p
-        name = t.upper
-        if name in ("$IN", "$OUT"):
-            p.expect("[")
-            idx = self.ex.parse()
-            p.expect("]")
-            return lambda vm: _io_read(vm, name, int(number(idx(vm))), "")
-        if name == "$POS_ACT":
-            return lambda vm: {**pose_dict(vm.motion.program_pose(vm.motion.joints())),
-                               **_st(vm)}  # fmt: skip
-        if name == "$AXIS_ACT":
-            return lambda vm: {
-                f"A{i + 1}": math.degrees(v) for i, v in enumerate(vm.motion.joints())
-            }
-        full = name
-        save = p.i
-        if p.accept("."):
-            full += "." + p.expect_kind("id", "a field").upper
-        if full in SETTINGS:
-            key = SETTINGS[full]
-            return lambda vm: vm.lang[key]
-        p.i = save
-        raise error(t.loc, f"reading {full} is not supported by workcell's KRL reader")
-
-
-BINARY: dict[str, tuple[int, Any]] = {
-    "==": (1, COMPARE["=="]), "<>": (1, COMPARE["<>"]), "<": (1, COMPARE["<"]),
-    ">": (1, COMPARE[">"]), "<=": (1, COMPARE["<="]), ">=": (1, COMPARE[">="]),
-    "OR": (2, lambda a, b: boolean(a, "OR") or boolean(b, "OR")),
-    "EXOR": (3, lambda a, b: boolean(a, "EXOR") != boolean(b, "EXOR")),
-    "AND": (4, lambda a, b: boolean(a, "AND") and boolean(b, "AND")),
-    "+": (5, ARITH["+"]), "-": (5, ARITH["-"]),
-    "*": (6, ARITH["*"]), "/": (6, ARITH["/"]),
-    ":": (8, geometric),
-}  # fmt: skip
-UNARY: dict[str, tuple[int, Any]] = {
-    "NOT": (7, lambda a: not boolean(a, "NOT")),
-    "-": (7, lambda a: -number(a)),
-    "+": (7, lambda a: number(a)),
-}
-
-
-# ---------------------------------------------------------------------- run time
-def _convert(typ: str, old: Any, v: Any) -> Any:
-    if typ in STRUCT_TYPES:
-        if not isinstance(v, dict):
-            raise ProgramError(f"a {typ} takes a structure {{...}}, got {v!r}")
-        return {**(old if isinstance(old, dict) else {}), **v}
-    if typ == "INT":
-        return int(number(v))
-    if typ == "REAL":
-        return number(v)
-    if typ == "BOOL":
-        return boolean(v, "a BOOL")
-    return v
-
-
-def _index(holder: Any, i: Any, what: str, base: int = 1) -> int:
-    if not isinstance(holder, list):
-        raise ProgramError(f"{what} is not an array")
-    k = int(number(i, "an index"))
-    if not base <= k < base + len(holder):
-        raise ProgramError(f"{what}[{k}] is outside the array (1 to {len(holder)})")
-    return k - base
-
-
-def _element(v: Any, i: Any, t: Token) -> Any:
-    return v[_index(v, i, t.text)]
-
-
-def _field(v: Any, f: Token) -> Any:
-    if not isinstance(v, dict) or f.upper not in v:
-        raise error(f.loc, f"no field {f.text} here")
-    return v[f.upper]
-
-
-def _element_of(base: Fn, idx: Fn, t: Token) -> Fn:
-    return lambda vm: _element(base(vm), idx(vm), t)
-
-
-def _field_of(base: Fn, f: Token) -> Fn:
-    return lambda vm: _field(base(vm), f)
-
-
-def _io_name(vm: VM, kind: str, n: int) -> str:
-    names = vm.program.outputs if kind == "$OUT" else vm.program.inputs
-    return names.get(n, "")
-
-
-def _io_read(vm: VM, kind: str, n: int, name: str) -> bool:
-    if kind == "$OUT":
-        return vm.motion.outputs.get(n, False)
-    return vm.motion.input(n, name or _io_name(vm, kind, n))
-
-
-def _seconds(v: Any) -> float:
-    s = number(v, "WAIT SEC's seconds")
-    if s < 0:
-        raise ProgramError(f"WAIT SEC needs seconds >= 0, got {s:g}")
-    return s
-
-
-def _wait_for(vm: VM, cond: Fn, t: Token) -> None:
-    if boolean(cond(vm), "WAIT FOR"):
-        return
-    raise ProgramError(
-        "WAIT FOR waits for a condition that is false and that nothing in this cell can "
-        "change (the simulator has no signals for it)"
-    )
-
-
-def _st(vm: VM) -> dict[str, int]:
-    s, t = kuka_status_turn(vm.motion.model, vm.motion.joints())
-    return {"S": s, "T": t}
-
-
-def _zone(vm: VM, approx: str | None) -> float:
-    if approx == "C_DIS":
-        return vm.lang["cdis"] / 1000.0
-    if approx == "C_PTP":
-        return vm.lang["cptp"] / 1000.0  # n % read as n mm (module doc)
-    return 0.0
-
-
-def _settings(vm: VM) -> None:
-    m = vm.motion
-    m.override = vm.lang["ov"] / 100.0
-    axes = vm.lang["vel_axis"]
-    if max(axes) - min(axes) > 1e-9:
-        raise ProgramError(
-            f"$VEL_AXIS differs between axes ({', '.join(f'{v:g}' for v in axes)} %): the "
-            "simulator scales every joint's limits by one factor"
-        )
-    m.joint_fraction = axes[0] / 100.0
-    m.trapezoid = None
-
-
-def _move(vm: VM, kind: str, target: Any, via: Any, approx: str | None) -> None:
-    if not isinstance(target, dict):
-        raise ProgramError(f"{kind} needs a position or axis structure, got {target!r}")
-    _settings(vm)
-    m = vm.motion
-    zone = _zone(vm, approx)
-    q = m.joints()
-    if kind == "PTP" and any(k.startswith("A") and k[1:].isdigit() for k in target):
-        m.move_joints(joints_of(target, q, "the PTP target"), zone)
-        return
-    full = {**pose_dict(m.program_pose(q)), **target}
-    T = program_pose(full, f"the {kind} target")
-    if kind == "PTP":
-        s, t = full.get("S") if "S" in target else None, full.get("T") if "T" in target else None
-        if s is None and t is None:
-            m.move_pose(T, zone, None, None, "PTP target")
-        else:
-
-            def key(robot: Any, v: Any) -> object:
-                st = kuka_status_turn(robot, v)
-                return (st[0] if s is not None else None, st[1] if t is not None else None)
-
-            want = (
-                int(number(s)) if s is not None else None,
-                int(number(t)) if t is not None else None,
-            )
-            m.move_pose(T, zone, key, want, "PTP target (S, T)")
-        return
-    v, a = vm.lang["vel_cp"], vm.lang["acc_cp"]
-    if v <= 0 or a <= 0:
-        raise ProgramError(f"{kind} needs $VEL.CP and $ACC.CP > 0")
-    if kind == "LIN":
-        m.move_linear(T, v, a, zone)
-        return
-    if not isinstance(via, dict):
-        raise ProgramError("CIRC needs an auxiliary position structure")
-    V = program_pose({**full, **via}, "the CIRC auxiliary point")
-    m.move_circular(V, T, v, a, zone)
-
-
-def _bas(vm: VM, what: str, arg: Any) -> None:
-    lang = vm.lang
-    if what == "#INITMOV":
-        lang.update(
-            vel_cp=DEF_VEL_CP, acc_cp=DEF_ACC_CP, vel_axis=[100.0] * 6, acc_axis=[100.0] * 6
-        )
-    elif what in ("#VEL_PTP", "#PTP_PARAMS"):
-        x = number(arg, f"BAS({what})'s percentage")
-        if not 0 < x <= 100:
-            raise ProgramError(f"BAS({what}, {x:g}): the speed must be in (0, 100] %")
-        lang["vel_axis"] = [x] * 6
-        if what == "#PTP_PARAMS":
-            pdat = vm.vars.get("PDAT_ACT") or {}
-            if "APO_DIST" in pdat:
-                lang["cdis"] = number(pdat["APO_DIST"], "PDAT_ACT.APO_DIST")
-    elif what == "#ACC_PTP":
-        lang["acc_axis"] = [number(arg)] * 6
-    elif what in ("#VEL_CP", "#CP_PARAMS"):
-        x = number(arg, f"BAS({what})'s speed (m/s)")
-        if x <= 0:
-            raise ProgramError(f"BAS({what}, {x:g}): the speed must be > 0 m/s")
-        lang["vel_cp"] = x
-        if what == "#CP_PARAMS":
-            ldat = vm.vars.get("LDAT_ACT") or {}
-            if "APO_DIST" in ldat:
-                lang["cdis"] = number(ldat["APO_DIST"], "LDAT_ACT.APO_DIST")
-    elif what == "#ACC_CP":
-        x = number(arg, "BAS(#ACC_CP)'s percentage")
-        lang["acc_cp"] = DEF_ACC_CP * x / 100.0
-    elif what in ("#TOOL", "#BASE"):
-        table = vm.vars.get("TOOL_DATA" if what == "#TOOL" else "BASE_DATA")
-        frame = None
-        if isinstance(table, list):
-            frame = table[_index(table, arg, what)]
-        if what == "#TOOL":
-            vm.motion.tcp = None if not frame else tcp_of_tool(frame)
-        else:
-            vm.motion.base = np.eye(4) if not frame else frame_matrix(frame, "BASE_DATA")
 
 
 def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotProgram:
