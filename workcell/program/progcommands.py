@@ -24,7 +24,9 @@ LANGUAGES = ("urscript", "krl", "rapid", "fanuc_ls")
 
 def _signals(v: object, what: str) -> tuple[tuple[str, int], ...]:
     """Signal names to I/O numbers: an object {name: number >= 0} (or [name, number] pairs)."""
-    if isinstance(v, (list, tuple)) and all(isinstance(x, (list, tuple)) and len(x) == 2 for x in v):
+    if isinstance(v, (list, tuple)) and all(
+        isinstance(x, (list, tuple)) and len(x) == 2 for x in v
+    ):
         v = dict(v)
     if not isinstance(v, dict):
         raise ProgramError(f"{what} must be an object of signal names and I/O numbers, got {v!r}")
