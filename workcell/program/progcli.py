@@ -30,27 +30,50 @@ def _signals(items: list[str] | None) -> dict[str, int]:
     return out
 
 
+def _run_on_cell(program: str, cell: Any) -> Any:
+    """Run the script ``program`` on ``cell``: its lines up to its first ``simulate`` (which
+    build or load a cell) are skipped and that line's mode and dt start the simulation
+    (path, 0.01 s without one); returns the simulator."""
+    from workcell.errors import ProgramError
+    from workcell.files import read_text
+    from workcell.program.interpreter import Interpreter, check_script
+    from workcell.program.language import parse_line
+    from workcell.program.session import Session
+    from workcell.program.simcommands import Simulate, StopSimulation
+    from workcell.sim import Simulator
+
+    text = read_text(program)
+    check_script(text, program)
+    lines = list(enumerate(text.splitlines(), 1))
+    mode, dt, first = "path", 0.01, 0
+    for i, line in lines:
+        commands = list(parse_line(line))
+        sims = [c for c in commands if isinstance(c, Simulate)]
+        if sims and not first:
+            first, mode, dt = i, sims[0].mode, sims[0].dt
+        elif first and any(isinstance(c, (Simulate, StopSimulation)) for c in commands):
+            raise ProgramError(
+                f"{program}:{i}: export-program runs one simulation; this line starts or stops another"
+            )
+    sim = Simulator(cell, mode=mode, dt=dt)
+    interp = Interpreter(Session(sim=sim, base_dir=Path(program).parent), lambda text: None)
+    for i, line in lines:
+        if i > first:
+            interp.run_line(line, f"{program}:{i}: ")
+    return sim
+
+
 def _export_program(args: argparse.Namespace) -> int:
     from workcell.examples import load_cell
-    from workcell.program.interpreter import run_script
-    from workcell.program.session import Session
-    from workcell.program.simcommands import Simulate
     from workcell.robotprog import export
 
     signals = _signals(args.signal)
-    session = Session(base_dir=Path(args.program).parent)
-    session.set_cell(load_cell(args.cell))
-    session.execute(Simulate("path", 0.01))
-    run_script(args.program, session, out=lambda text: None)
-    if session.sim is None:
-        from workcell.errors import ProgramError
-
-        raise ProgramError(f"{args.program}: the script ended its simulation ('simulate stop')")
+    sim = _run_on_cell(args.program, load_cell(args.cell))
     name = Path(args.program).stem
     target = Path(args.out) / f"{name}{_SUFFIX[args.language]}"
-    for path in export(session.sim, args.robot, target, language=args.language, signals=signals):
+    for path in export(sim, args.robot, target, language=args.language, signals=signals):
         print(f"written {path}")
-    print(f"simulated cycle time {session.sim.sim_time:.6f} s")
+    print(f"simulated cycle time {sim.sim_time:.6f} s")
     return 0
 
 
@@ -60,9 +83,9 @@ def register(sub: Any) -> None:
         "export-program",
         help="write a robot's program, as it ran in a simulation, in URScript, KRL, RAPID "
         "or FANUC TP (docs/robot-programs.md)",
-        description="Load CELL, start simulating it (path mode, dt 0.01 s), run FILE.wcl "
-        "(a script that loads or builds its own cell and starts its own simulation uses "
-        "those) and write what robot R did in the robot language: workcell export-program "
+        description="Run FILE.wcl on CELL (the script's lines up to its first 'simulate', "
+        "which build or load a cell, are skipped; that line's mode and dt are used) and "
+        "write what robot R did in the robot language: workcell export-program "
         "cell.json --program pick.wcl --robot puma --language krl --out out/ (writes "
         "out/pick.src and out/pick.dat).",
     )

@@ -57,10 +57,14 @@ class ExportProgram(Command, wire="export_program"):
     signals: tuple[tuple[str, int], ...] = arg(_signals, ())
 
     def execute(self, session: Session) -> list[str]:
-        from workcell.robotprog import export
+        from pathlib import Path
 
-        sim = session.require_sim()
+        from workcell.robotprog import export, language_of
+
         target = session.path(self.path)
+        if language_of(target, self.language) == "krl":  # the .dat beside it: inside too
+            session.path(str(Path(self.path).with_suffix(".dat")))
+        sim = session.require_sim()
         return export(sim, self.robot, target, language=self.language, signals=dict(self.signals))
 
 
@@ -73,10 +77,17 @@ class RunRobotProgram(Command, wire="run_robot_program"):
     language: str | None = arg(a.optional(a.choice(*LANGUAGES)), None)
 
     def execute(self, session: Session) -> dict[str, Any]:
-        from workcell.robotprog import load
+        from pathlib import Path
 
+        from workcell.robotprog import language_of, load
+
+        path = session.path(self.path)
+        if language_of(path, self.language) == "krl":  # the .dat it reads: inside too
+            for p in path.parent.glob("*"):
+                if p.stem.lower() == path.stem.lower() and p.suffix.lower() == ".dat":
+                    session.path(str(Path(self.path).parent / p.name))
         sim = session.require_sim()
-        program = load(session.path(self.path), language=self.language)
+        program = load(path, language=self.language)
         vm = program.run(sim, self.robot)
         return {
             "sim_time_s": sim.sim_time,
