@@ -14,7 +14,6 @@ from workcell.examples import CELL_HELP
 
 __all__ = ["register"]
 
-LANGUAGES = ("urscript", "krl", "rapid", "fanuc_ls")
 _SUFFIX = {"urscript": ".script", "krl": ".src", "rapid": ".mod", "fanuc_ls": ".ls"}
 
 
@@ -92,7 +91,7 @@ def register(sub: Any) -> None:
     p.add_argument("cell", metavar="CELL", help=CELL_HELP)
     p.add_argument("--program", metavar="FILE.wcl", required=True, help="the program to run")
     p.add_argument("--robot", metavar="R", required=True, help="the robot whose program to write")
-    p.add_argument("--language", choices=LANGUAGES, required=True)
+    p.add_argument("--language", choices=tuple(_SUFFIX), required=True)
     p.add_argument("--out", metavar="DIR", required=True, help="the folder to write into")
     p.add_argument(
         "--signal",

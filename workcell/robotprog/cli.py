@@ -9,21 +9,6 @@ from typing import Any
 
 __all__ = ["run_robot_programs"]
 
-LANGUAGES = ("urscript", "krl", "rapid", "fanuc_ls")
-_SUFFIX = {"urscript": ".script", "krl": ".src", "rapid": ".mod", "fanuc_ls": ".ls"}
-
-
-def _signals(items: list[str] | None) -> dict[str, int]:
-    from workcell.errors import ProgramError
-
-    out: dict[str, int] = {}
-    for item in items or []:
-        name, _, n = item.partition("=")
-        if not name or not n.strip().isdigit():
-            raise ProgramError(f"--signal takes NAME=NUMBER (e.g. gripper=3), got {item!r}")
-        out[name] = int(n)
-    return out
-
 
 def run_robot_programs(args: argparse.Namespace, keep: list[Any]) -> Any:
     """``workcell run CELL --robot-program R=FILE ...``: run each robot's program on the

@@ -68,13 +68,6 @@ def _io(vm: VM, kind: str, n: int, name: str) -> bool:
     return vm.motion.input(n, name or _name(vm, n, kind))
 
 
-def _seconds(v: Any) -> float:
-    s = number(v, "WAIT's seconds")
-    if s < 0:
-        raise ProgramError(f"WAIT needs seconds >= 0, got {s:g}")
-    return s
-
-
 def _r(vm: VM, n: int) -> float:
     return vm.lang.setdefault("R", {}).get(n, 0.0)
 

@@ -99,13 +99,6 @@ def _io_read(vm: VM, kind: str, n: int, name: str) -> bool:
     return vm.motion.input(n, name or _io_name(vm, kind, n))
 
 
-def _seconds(v: Any) -> float:
-    s = number(v, "WAIT SEC's seconds")
-    if s < 0:
-        raise ProgramError(f"WAIT SEC needs seconds >= 0, got {s:g}")
-    return s
-
-
 def _wait_for(vm: VM, cond: Fn, t: Token) -> None:
     if boolean(cond(vm), "WAIT FOR"):
         return

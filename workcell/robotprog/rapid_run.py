@@ -289,10 +289,7 @@ def _instruction(vm: VM, u: str, args: list[Fn], opts: dict[str, Fn | None]) -> 
         name = args_name(vm, a[0])
         m.wait_input(_signal(vm, name), name, number(a[1]) != 0)
     elif u == "WAITTIME":
-        s = number(a[0], "WaitTime's seconds")
-        if s < 0:
-            raise ProgramError(f"WaitTime needs seconds >= 0, got {s:g}")
-        m.dwell(s)
+        m.dwell(a[0], "WaitTime")
     elif u == "VELSET":
         ov = number(a[0], "VelSet's override")
         if not 0 < ov <= 100:

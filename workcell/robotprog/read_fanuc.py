@@ -43,7 +43,6 @@ from workcell.robotprog.fanuc_run import (
     _pr,
     _pr_element,
     _r,
-    _seconds,
     _set_frame_number,
     _set_pr,
     _set_pr_element,
@@ -209,7 +208,7 @@ class FanucReader:
                     p.expect("sec")
                     p.expect(")")
                 self.done()
-                code.do(t.loc, lambda vm: vm.motion.dwell(_seconds(secs(vm))))
+                code.do(t.loc, lambda vm: vm.motion.dwell(secs(vm), "WAIT"))
         elif u in ("DO", "RO"):
             p.next()
             n, name = _ref(p.expect_kind("ref", "an output number [n]"))

@@ -43,7 +43,6 @@ from workcell.robotprog.krl_run import (
     _index,
     _io_name,
     _move,
-    _seconds,
     _wait_for,
 )
 from workcell.robotprog.kuka_values import (
@@ -380,7 +379,7 @@ class KrlReader(KrlExpressions):
         if p.accept("SEC"):
             secs = self.ex.parse()
             p.end_line()
-            code.do(t.loc, lambda vm: vm.motion.dwell(_seconds(secs(vm))))
+            code.do(t.loc, lambda vm: vm.motion.dwell(secs(vm), "WAIT SEC"))
             return
         p.expect("FOR", "SEC or FOR")
         single = self._single_input()

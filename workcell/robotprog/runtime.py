@@ -373,8 +373,12 @@ class Executor:
         )
 
     # ------------------------------------------------------------------ time and I/O
-    def dwell(self, seconds: float) -> None:
-        self.sim.wait(float(seconds))
+    def dwell(self, seconds: Any, what: str = "a wait") -> None:
+        """Let ``seconds`` (>= 0) pass; ``what`` names the statement in errors."""
+        s = _number(seconds, f"{what}'s seconds")
+        if s < 0:
+            raise ProgramError(f"{what} needs seconds >= 0, got {s:g}")
+        self.sim.wait(s)
 
     def set_output(self, number: int, name: str, value: bool) -> None:
         if name.lower() == GRIPPER:

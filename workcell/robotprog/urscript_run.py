@@ -183,10 +183,7 @@ def _builtin(
         k = int(number(a["n"], "the input number"))
         return m.input(k, _name(vm, k))
     if name in ("sleep", "sync"):
-        s = SYNC if name == "sync" else number(a["t"], "sleep's seconds")
-        if s < 0:
-            raise ProgramError(f"sleep needs seconds >= 0, got {s:g}")
-        m.dwell(s)
+        m.dwell(SYNC if name == "sync" else a["t"], name)
         return None
     if name == "textmsg":
         return None
