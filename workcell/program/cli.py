@@ -53,6 +53,17 @@ def _run(args: argparse.Namespace) -> int:
     from workcell.program.session import Session
 
     check_outputs(rrd=args.save, png=args.render)
+    if args.robot_program:  # CELL --robot-program R=FILE: robot programs on a cell
+        from workcell.robotprog.cli import run_robot_programs
+
+        keep: list[Any] = []
+        try:
+            sim = run_robot_programs(args, keep)
+        except WorkcellError:
+            if keep:
+                _outputs(args, keep[0])
+            raise
+        return _finish(args, sim)
     session = Session(base_dir=Path(args.script).parent)
     try:
         run_script(args.script, session, echo=args.echo)
@@ -61,17 +72,22 @@ def _run(args: argparse.Namespace) -> int:
             session.sim._log_error(exc)
             _outputs(args, session.sim)
         raise
-    _outputs(args, session.sim)
-    if args.cycle_time and session.sim is not None:
+    return _finish(args, session.sim)
+
+
+def _finish(args: argparse.Namespace, sim: Any) -> int:
+    """The outputs, cycle-time table and summary a finished run asks for."""
+    _outputs(args, sim)
+    if args.cycle_time and sim is not None:
         from workcell.sim.cycle import format_table
 
-        print(format_table(session.sim.cycle_time()))
-    if args.summary and session.sim is not None:
+        print(format_table(sim.cycle_time()))
+    if args.summary and sim is not None:
         import json
 
         from workcell.program.protocol import to_jsonable
 
-        print(json.dumps(to_jsonable(session.sim.summary())))
+        print(json.dumps(to_jsonable(sim.summary())))
     return 0
 
 
@@ -172,7 +188,18 @@ def register(sub: Any) -> None:
         help="run a command-language script (.wcl)",
         description="Run a .wcl script; the first error stops it (exit status 2).",
     )
-    run.add_argument("script", metavar="FILE.wcl")
+    run.add_argument(
+        "script",
+        metavar="FILE.wcl|CELL",
+        help="a script; with --robot-program, the cell (CELL.json or an example) to run on",
+    )
+    run.add_argument(
+        "--robot-program",
+        action="append",
+        metavar="ROBOT=FILE",
+        help="run a robot program (.script, .src, .mod, .ls; docs/robot-programs.md) on "
+        "ROBOT of the cell; repeat for several robots (run one after another)",
+    )
     run.add_argument("--echo", action="store_true", help="print each command before its output")
     run.add_argument(
         "--summary", action="store_true", help="print the simulation's summary as JSON at the end"
