@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import EXAMPLE1_SIM_TIME, snapshot
+from program_helpers import EXAMPLE1_SIM_TIME, snapshot
 
 from workcell import JointLimitError, ModelError, ProgramError, WorkcellError, spatial
 from workcell.examples import thesis_joints
