@@ -26,6 +26,22 @@ def event_texts(path) -> list[str]:
     return out
 
 
+def _run_in_process(tmp_path, text: str):
+    """The script's simulator as `workcell run` leaves it (the error logged)."""
+    from workcell.errors import WorkcellError
+    from workcell.program.interpreter import run_script
+    from workcell.program.session import Session
+
+    script = tmp_path / "run.wcl"
+    script.write_text(text)
+    session = Session(base_dir=tmp_path)
+    try:
+        run_script(script, session, out=lambda _: None)
+    except WorkcellError as exc:
+        session.sim._log_error(exc)
+    return script, session.sim
+
+
 def test_a_failing_script_still_writes_its_recording_with_the_error(tmp_path, capsys):
     script = tmp_path / "bad.wcl"
     script.write_text(SCRIPT)
@@ -52,25 +68,16 @@ def test_a_script_without_a_simulation_cannot_be_recorded(tmp_path, capsys):
 def test_the_picture_of_a_failing_run_ends_with_the_failing_moment(tmp_path, capsys):
     """--render shows the start, each command's end and, last, the moment the script
     stopped: the state the failing command found, captioned with its error."""
-    from workcell.errors import WorkcellError
-    from workcell.program.interpreter import run_script
-    from workcell.program.session import Session
     from workcell.record.sheets import key_frames
 
-    script = tmp_path / "bad.wcl"
-    script.write_text(SCRIPT)
-    session = Session(base_dir=tmp_path)
-    try:
-        run_script(script, session, out=lambda _: None)
-    except WorkcellError as exc:
-        session.sim._log_error(exc)  # as `workcell run` does
-    keys = key_frames(session.sim)
+    script, sim = _run_in_process(tmp_path, SCRIPT)
+    keys = key_frames(sim)
     assert [k.title for k in keys] == [
         "initial state",
         "puma: move_end_effector",
         "error: JointLimitError",
     ]
-    assert keys[-1].frame == session.sim.frames - 1
+    assert keys[-1].frame == sim.frames - 1
     assert "joint 5" in keys[-1].detail
     png = tmp_path / "bad.png"
     assert main(["run", str(script), "--render", str(png)]) == 2
@@ -86,22 +93,6 @@ simulate path dt 0.02
 move joints relative puma 20 -10 0 0 0 0
 move joints relative pumax 5 0 0 0 0 0
 """
-
-
-def _run_in_process(tmp_path, text: str):
-    """The script's simulator as `workcell run` leaves it (the error logged)."""
-    from workcell.errors import WorkcellError
-    from workcell.program.interpreter import run_script
-    from workcell.program.session import Session
-
-    script = tmp_path / "run.wcl"
-    script.write_text(text)
-    session = Session(base_dir=tmp_path)
-    try:
-        run_script(script, session, out=lambda _: None)
-    except WorkcellError as exc:
-        session.sim._log_error(exc)
-    return script, session.sim
 
 
 def same_picture(a: np.ndarray, b: np.ndarray) -> bool:
