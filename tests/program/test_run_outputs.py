@@ -217,3 +217,15 @@ def test_a_run_that_collides_says_so_and_exits_3(tmp_path, capsys):
     err = capsys.readouterr().err
     assert line in err
     assert "JointLimitError" in err
+
+
+def test_a_script_that_stops_before_simulating_says_nothing_was_drawn(tmp_path, capsys):
+    # a typo on line 2 stops the script before its `simulate` line: no picture to draw
+    script = tmp_path / "typo.wcl"
+    script.write_text("cell example pick-place\nmove joints absolutely puma 5 0 0 0 0 0\n")
+    png = tmp_path / "typo.png"
+    assert main(["run", str(script), "--render", str(png)]) == 2
+    err = capsys.readouterr().err
+    assert "nothing recorded or drawn: the script stopped before it started a simulation" in err
+    assert "CommandSyntaxError" in err
+    assert not png.exists()

@@ -65,6 +65,9 @@ def _run(args: argparse.Namespace) -> int:
             session.sim._log_error(exc)
             _outputs(args, session.sim)
             _collisions(session.sim, args.allow_collisions)
+        elif args.save or args.render:
+            print("workcell: nothing recorded or drawn: the script stopped before it started "
+                  "a simulation", file=sys.stderr)  # fmt: skip
         raise
     _outputs(args, session.sim)
     if args.cycle_time and session.sim is not None:
