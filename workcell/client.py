@@ -49,7 +49,7 @@ from workcell.program.protocol import (
     error_class,
     to_jsonable,
 )
-from workcell.sim.timeline import Event
+from workcell.sim.timeline import Event, Events
 
 __all__ = ["Client"]
 
@@ -420,9 +420,12 @@ class Client:
         return float(self.call("wall_time"))
 
     @property
-    def events(self) -> tuple[Event, ...]:
-        """The timeline's events."""
-        return tuple(Event(e["t"], e["robot"], e["kind"], e["detail"]) for e in self.call("events"))
+    def events(self) -> Events:
+        """The timeline's events: ``sim.events()`` or ``sim.events`` (the same tuple), as
+        on :class:`~workcell.sim.Simulator`."""
+        return Events(
+            Event(e["t"], e["robot"], e["kind"], e["detail"]) for e in self.call("events")
+        )
 
     @property
     def cell(self) -> Workcell:
