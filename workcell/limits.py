@@ -18,6 +18,8 @@ limit                       default        what it bounds
 ``max_file_bytes``          256 MiB        a model, cell or script file read
 ``max_coordinate``          1e6 m          any coordinate, length or translation given, and
                                            any entry of a transform's 3x3 part
+``max_part_copies``         100            copies a part source without a ``count`` makes
+                                           (each is a body of the compiled model)
 ==========================  =============  ==================================================
 
 Raise (or lower) them for a block of code, in this thread only::
@@ -74,6 +76,7 @@ class Limits:
     max_sim_time: float = _limit(1e7, "s", "the simulated clock")
     max_file_bytes: int = _limit(256 << 20, "bytes", "a file read (model, cell, script)")
     max_coordinate: float = _limit(1e6, "m", "a coordinate, length or transform entry")
+    max_part_copies: int = _limit(100, "copies", "copies made by a source without a count")
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):

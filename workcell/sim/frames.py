@@ -15,7 +15,14 @@ undone). :meth:`Simulator.clearance <workcell.sim.simulator.Simulator.clearance>
 the minimum distance between two named things.
 
 Undo (:meth:`FrameRunner._transaction`): an exception while frames are applied restores
-joints, parts, grasps, clocks, speeds and timeline as they were before the command.
+joints, parts, grasps, clocks, speeds, timeline and the devices' state
+(:meth:`~workcell.sim.devices.CellLogic.rebuild`) as they were before the command; inside
+``run_programs``, a command during which other programs ran (:mod:`workcell.logic`) is not
+undone: what the others did stays, and so does what it did before it failed.
+
+Devices (:mod:`workcell.sim.devices`): in a cell with belts, sensors, sources or sinks,
+every frame is computed (playback mode too) and the devices are evaluated on it
+(:meth:`FrameRunner._emit_devices`).
 """
 
 from __future__ import annotations
@@ -34,6 +41,7 @@ from workcell.sim.contacts import Penetration
 from workcell.sim.gripping import Carried
 
 if TYPE_CHECKING:
+    from workcell.sim.devices import CellLogic
     from workcell.sim.simulator import Simulator
 
 __all__ = ["FrameRunner"]
@@ -87,23 +95,30 @@ class FrameRunner:
         Q: Array,
         carried: list[Carried],
         mover: str | None = None,
-    ) -> None:
+    ) -> int:
         """Apply (path, joint-by-joint) or store (playback) frames; advance both clocks.
 
         Carried parts are posed at gripper x relative pose in every frame (their columns
         of Q are overwritten); with collision checks every frame is computed and checked
-        (a collision involving ``mover``, the robot that moves, is charged to it).
+        (a collision involving ``mover``, the robot that moves, is charged to it). With
+        devices (:mod:`workcell.sim.devices`) each frame is computed and the devices
+        evaluated on it; the frames may stop early when a watched signal takes its value.
+        Returns the number of frames made (``len(times)`` unless stopped early).
         """
         k = len(times)
         if k == 0:
-            return
+            return 0
         m, d = self.model, self.data
         clock = time.perf_counter
         w0 = self._wall
         c0 = clock()
         check = self.check_collisions
         first = len(self.timeline)  # frame j of this batch becomes timeline frame first + j
-        if self.mode == "playback" and not carried and not check:
+        logic = self._logic
+        if logic is not None:
+            walls = np.empty(k)
+            k = self._emit_devices(times, Q, carried, mover, first, logic, walls)
+        elif self.mode == "playback" and not carried and not check:
             walls = np.full(k, clock())
             d.qpos[:] = Q[-1]
             mujoco.mj_kinematics(m, d)
@@ -133,9 +148,54 @@ class FrameRunner:
                         pens = self.contacts.penetrations(d)
                         self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
                 walls[j] = clock()
-        self.timeline.extend(times, w0 + (walls - c0), Q)
-        self.sim_time = float(times[-1])
+        self.timeline.extend(times[:k], w0 + (walls[:k] - c0), Q[:k])
+        self.sim_time = float(times[k - 1])
         self._wall = w0 + (clock() - c0)
+        return k
+
+    def _emit_devices(
+        self: Simulator,
+        times: Array,
+        Q: Array,
+        carried: list[Carried],
+        mover: str | None,
+        first: int,
+        logic: CellLogic,
+        walls: Array,
+    ) -> int:
+        """``_emit``'s frames for a cell with devices (:mod:`workcell.sim.devices`): every
+        frame is computed (playback mode too), the devices evaluated on it and the whole
+        state stored; stops after a frame on which a watched signal took its value.
+        Returns the number of frames made."""
+        m, d = self.model, self.data
+        qpos, kin, collide, mul = d.qpos, mujoco.mj_kinematics, mujoco.mj_collision, mujoco.mju_mulPose
+        xpos, xquat = d.xpos, d.xquat
+        p, q = np.empty(3), np.empty(4)
+        check, movers, clock = self.check_collisions, logic.movers, time.perf_counter
+        logic.stop = False
+        for j in range(len(times)):
+            if movers:
+                logic.carry_over(qpos, Q[j])
+            else:
+                qpos[:] = Q[j]
+            kin(m, d)
+            if carried:
+                for g, adr, rp, rq in carried:
+                    mul(p, q, xpos[g], xquat[g], rp, rq)
+                    qpos[adr : adr + 3] = p
+                    qpos[adr + 3 : adr + 7] = q
+                kin(m, d)
+            logic.frame(float(times[j]), first + j)
+            Q[j] = qpos
+            if check:
+                collide(m, d)
+                if d.ncon or self._touching:
+                    pens = self.contacts.penetrations(d)
+                    self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
+            walls[j] = clock()
+            if logic.stop:
+                return j + 1
+        return len(times)
 
     def _contact_events(
         self: Simulator,
@@ -179,9 +239,12 @@ class FrameRunner:
             self.data.eq_active.copy(),
             self.model.eq_data.copy(),
         )
+        hold = getattr(self._block, "releases", None)  # programs run together
         try:
             yield
         except BaseException:
+            if hold is not None and getattr(self._block, "releases", None) != hold:
+                raise  # other programs ran meanwhile: what happened stays (logic/scheduler)
             (
                 self.sim_time,
                 self._wall,
@@ -199,4 +262,6 @@ class FrameRunner:
             del self.grasps[n_grasps:]
             self.data.qpos[:] = qpos
             mujoco.mj_kinematics(self.model, self.data)
+            if self._logic is not None:
+                self._logic.rebuild()
             raise

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell.cell.compile_devices import is_parked
 from workcell.sim.timeline import Event
 
 if TYPE_CHECKING:
@@ -67,11 +68,14 @@ class ReadBack:
 
     def part_positions(self: Simulator) -> dict[str, list[float]]:
         """World position (m) of each movable part's centroid, by name: the point grasps
-        aim at and ``place`` sets down (``part_pose`` gives the part frame's pose)."""
+        aim at and ``place`` sets down (``part_pose`` gives the part frame's pose). Parts
+        out of the world (a source's pattern and copies not made yet, parts a sink
+        removed: :mod:`workcell.cell.compile_devices`) are left out."""
         d = self.data
         return {
             p: (d.xpos[b] + d.xmat[b].reshape(3, 3) @ self._centroids[p]).tolist()
             for p, b in self._part_body.items()
+            if not is_parked(d.xpos[b][2])  # a source's copy not made yet, or removed
         }
 
     def clearance(self: Simulator, a: str, b: str) -> float:
