@@ -168,7 +168,12 @@ class FrameRunner:
         state stored; stops after a frame on which a watched signal took its value.
         Returns the number of frames made."""
         m, d = self.model, self.data
-        qpos, kin, collide, mul = d.qpos, mujoco.mj_kinematics, mujoco.mj_collision, mujoco.mju_mulPose
+        qpos, kin, collide, mul = (
+            d.qpos,
+            mujoco.mj_kinematics,
+            mujoco.mj_collision,
+            mujoco.mju_mulPose,
+        )
         xpos, xquat = d.xpos, d.xquat
         p, q = np.empty(3), np.empty(4)
         check, movers, clock = self.check_collisions, logic.movers, time.perf_counter
