@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workcell.cell.compile_devices import is_parked
+from workcell.sim.throughput import throughput
 from workcell.sim.timeline import Event
 
 if TYPE_CHECKING:
@@ -89,7 +90,8 @@ class ReadBack:
 
     def summary(self: Simulator) -> dict[str, Any]:
         """The DESIGN.md ``workcell demo --json`` fields this slice knows (``mjcf`` None),
-        and ``commands``: the cycle-time records (:meth:`cycle_time`)."""
+        ``commands``: the cycle-time records (:meth:`cycle_time`), and ``throughput``: the
+        cell's results (:meth:`throughput`)."""
         return {
             "sim_time_s": self.sim_time,
             "wall_time_s": self._wall,
@@ -99,4 +101,15 @@ class ReadBack:
             "objects": self.part_positions(),
             "mjcf": None,
             "commands": self.cycle_time()["commands"],
+            "throughput": self.throughput(),
         }
+
+    def throughput(self: Simulator) -> dict[str, Any]:
+        """The cell's results (:mod:`workcell.sim.throughput`): parts per hour at each
+        sink, rising edges per hour of each bool signal, each robot's moving / waiting /
+        idle fractions of the simulated time."""
+        logic = self._logic
+        bools = (
+            [] if logic is None else [k for k, v in logic.initial.items() if isinstance(v, bool)]
+        )
+        return throughput(self.events, self.sim_time, self.robots, self.cell.sinks, bools)
