@@ -6,8 +6,8 @@
   (``C.visual1``, ``C.col1``; none for a belt lower than the slab) and the end stop plate
   (``C.visual2``, ``C.col2``) just past the belt's end; the collision geoms are boxes
   (group 3), the visual ones non-colliding (group 2). In the compiled model the belt's
-  ``surfacevel`` is its speed when it runs from the start (no run signal), else 0; the
-  physics mode sets it while it runs.
+  ``surfacevel`` is its speed when it runs from the start (no run signal, or one whose
+  initial value is true), else 0; the physics mode sets it while it runs.
 - source copies: the compiled model is fixed once compiled, so every copy a source can
   make (``<part>_1`` ... ``<part>_<pool>``) is a body with a free joint from the start,
   sharing its pattern's meshes, *parked*: at :func:`parking_position` (k-th copy of the
