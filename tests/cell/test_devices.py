@@ -60,7 +60,8 @@ def test_json_round_trip_keeps_every_device(tmp_path):
     data = json.loads(path.read_text())
     assert [s["initial"] for s in data["signals"]] == [True, 3, 0.5]
     assert type(back.signals["level"].initial) is float
-    assert back.sources["feeder"].count == 3 and back.sinks["out"].size.tolist() == [0.3] * 3
+    assert back.sources["feeder"].count == 3
+    assert back.sinks["out"].size.tolist() == [0.3] * 3
 
 
 def _state(cell: Workcell) -> str:
@@ -200,14 +201,16 @@ def test_removing_a_signal_a_device_uses_is_refused():
         cell.remove("go")
     cell.remove("belt")
     cell.remove("go")
-    assert "go" not in cell.signals and cell.kind_of("beam") == "sensor"
+    assert "go" not in cell.signals
+    assert cell.kind_of("beam") == "sensor"
 
 
 def test_a_source_without_count_has_the_limit_as_its_pool():
     with limits.using(max_part_copies=5):
         cell = base_cell()
         src = cell.add_source("feeder", "box", at=(0, 0, 0), every=1.0)
-    assert src.pool == 5 and src.copies[-1] == "box_5"
+    assert src.pool == 5
+    assert src.copies[-1] == "box_5"
 
 
 def test_the_compiled_belt_stands_where_it_was_given():
@@ -221,7 +224,8 @@ def test_the_compiled_belt_stands_where_it_was_given():
     # the slab: top face at the belt's height, its x axis along the belt, length and width
     assert d.geom_xpos[g][2] + half[2] == pytest.approx(0.5, abs=1e-12)
     assert 2 * half[2] == pytest.approx(BELT_THICKNESS)
-    assert 2 * half[0] == pytest.approx(2.5) and 2 * half[1] == pytest.approx(0.3)
+    assert 2 * half[0] == pytest.approx(2.5)
+    assert 2 * half[1] == pytest.approx(0.3)
     assert np.allclose(d.geom_xmat[g].reshape(3, 3)[:, 0], [1, 0, 0], atol=1e-12)
     stop = m.geom("belt.col2").id
     assert d.geom_xpos[stop][0] - m.geom_size[stop][0] == pytest.approx(1.5, abs=1e-12)

@@ -58,7 +58,8 @@ def test_one_program_alone_gives_the_frames_of_its_direct_run():
     moves_of("a", q0)(direct)
     run = Simulator(cell, dt=0.01, profile="jerk")
     out = run.run_programs({"a": moves_of("a", q0)})
-    assert out["a"]["state"] == "done" and out["a"]["t_end"] == pytest.approx(direct.sim_time)
+    assert out["a"]["state"] == "done"
+    assert out["a"]["t_end"] == pytest.approx(direct.sim_time)
     t0, q_0 = frames(direct)
     t1, q_1 = frames(run)
     assert t1.shape == t0.shape
@@ -106,9 +107,10 @@ def test_a_handshake_starts_the_other_robot_at_the_frame_the_signal_is_set():
 
     sim.run_programs({"a": a, "b": b})
     signal = next(e for e in sim.events if e.kind == "signal")
-    t, q = sim.trajectory("b")
+    _t, q = sim.trajectory("b")
     f = signal.frame
-    assert np.array_equal(q[f], qb) and not np.array_equal(q[f + 1], qb)
+    assert np.array_equal(q[f], qb)
+    assert not np.array_equal(q[f + 1], qb)
     assert np.all(q[: f + 1] == qb)
     b_move = next(
         r
@@ -119,7 +121,8 @@ def test_a_handshake_starts_the_other_robot_at_the_frame_the_signal_is_set():
     a_move = next(r for r in sim.cycle_time()["commands"] if r["robot"] == "a")
     assert signal.t == pytest.approx(a_move["t_start"] + a_move["duration_s"], abs=1e-12)
     wait = next(r for r in sim.cycle_time()["commands"] if r["command"] == "wait_signal")
-    assert wait["robot"] == "b" and wait["duration_s"] == pytest.approx(signal.t, abs=1e-12)
+    assert wait["robot"] == "b"
+    assert wait["duration_s"] == pytest.approx(signal.t, abs=1e-12)
 
 
 def test_a_wait_with_a_timeout_in_a_program_ends_exactly_at_the_timeout():
@@ -144,10 +147,8 @@ def test_a_wait_with_a_timeout_in_a_program_ends_exactly_at_the_timeout():
     sim.run_programs({"a": a, "b": b})
     assert seen["t"] == pytest.approx(0.777, abs=1e-12)
     waits = [r for r in sim.cycle_time()["commands"] if r["command"] == "wait_signal"]
-    assert (
-        waits[0]["duration_s"] == pytest.approx(0.777, abs=1e-12)
-        and waits[0]["note"] == "timed out"
-    )
+    assert waits[0]["duration_s"] == pytest.approx(0.777, abs=1e-12)
+    assert waits[0]["note"] == "timed out"
     assert sim.sim_time == pytest.approx(5.0)
 
 
@@ -155,7 +156,8 @@ def test_an_uncaught_timeout_stops_the_run_with_the_programs_name():
     sim = Simulator(two_robots(), dt=0.01)
     with pytest.raises(SignalTimeout, match=r"^program 'a': wait_signal: signal 'b_done'"):
         sim.run_programs({"a": lambda s: s.wait_signal("b_done", timeout=0.5)})
-    assert sim.sim_time == pytest.approx(0.5) and sim.events[-1].kind == "error"
+    assert sim.sim_time == pytest.approx(0.5)
+    assert sim.events[-1].kind == "error"
     assert sim._block is None  # the simulator is usable again
     sim.wait(0.1)
 
@@ -166,7 +168,7 @@ def _run_in_thread(fn, seconds: float = 120.0):
     def target():
         try:
             box["value"] = fn()
-        except BaseException as exc:  # noqa: BLE001 - handed to the test
+        except BaseException as exc:
             box["error"] = exc
 
     t = threading.Thread(target=target, daemon=True)
@@ -223,7 +225,8 @@ def test_until_stops_an_endless_controller_and_a_robot_mid_move():
     out = sim.run_programs({"a": a, "controller": controller}, until=2.0)
     assert sim.sim_time == pytest.approx(2.0, abs=1e-12)
     assert out["a"]["state"] == out["controller"]["state"] == "stopped"
-    assert sim.events[-1].kind == "stop" and "'a' (moving)" in sim.events[-1].detail
+    assert sim.events[-1].kind == "stop"
+    assert "'a' (moving)" in sim.events[-1].detail
     cut = [r for r in sim.cycle_time()["commands"] if r.get("note") == "stopped at until"]
     assert {r["command"] for r in cut} == {"move_joints_absolute", "wait"}
     assert all(r["t_start"] + r["duration_s"] == pytest.approx(2.0) for r in cut)
@@ -294,7 +297,8 @@ def test_bad_run_arguments_change_nothing(kwargs, words):
     sim = Simulator(two_robots(), dt=0.01)
     with pytest.raises(ProgramError, match=words):
         sim.run_programs({"a": lambda s: None}, **kwargs)
-    assert sim.frames == 1 and len(sim.events) == 0
+    assert sim.frames == 1
+    assert len(sim.events) == 0
     with pytest.raises(ProgramError, match="joint-by-joint"):
         Simulator(two_robots(), mode="joint-by-joint").run_programs({"a": lambda s: None})
 
@@ -346,7 +350,8 @@ def test_a_wcl_program_runs_beside_a_python_one(tmp_path):
         s.wait_signal("b_done", True)
 
     out = sim.run_programs({"a": a, "b": tmp_path / "b.wcl"})
-    assert out["b"]["state"] == "done" and out["b"]["output"] == ["b_done = true"]
+    assert out["b"]["state"] == "done"
+    assert out["b"]["output"] == ["b_done = true"]
     waits = [r for r in sim.cycle_time()["commands"] if r["command"] == "wait_signal"]
     assert {r["robot"] for r in waits} == {"a", "b"}
     (tmp_path / "bad.wcl").write_text("simulate path\n")
