@@ -61,6 +61,7 @@ class Session:
         self.root = None if root is None else Path(root)
         self.lock = threading.RLock()
         self._block: tuple[Simulator, Any] | None = None
+        self.programs: dict[str, str] = {}  # run_programs' programs: name -> .wcl file
 
     @property
     def block(self) -> tuple[Simulator, Any] | None:
@@ -131,7 +132,8 @@ class Session:
         """Known names of ``kind`` for completion and checks.
 
         Kinds: a datamodel level, ``entity`` (every level), ``owner`` (blocks, objects,
-        scenes), ``robot``, ``part`` (static and movable), ``movable``, ``cellitem``.
+        scenes), ``robot``, ``part`` (static and movable), ``movable``, ``cellitem``,
+        ``signal`` (declared and sensors' signals), ``sensor``.
         """
         m = self.model
         if kind in ("surface", "block", "object", "scene"):
@@ -151,6 +153,10 @@ class Session:
             return list(cell.movable_parts)
         if kind == "cellitem":
             return cell.names()
+        if kind == "signal":
+            return [*cell.signals, *cell.sensors]
+        if kind == "sensor":
+            return list(cell.sensors)
         return []
 
     def relation_names(self, owner: str | tuple[str, str]) -> list[str]:
