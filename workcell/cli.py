@@ -91,6 +91,7 @@ def _demo_solids(args: argparse.Namespace) -> int:
 
 
 TITLES = {
+    "conveyor": "beyond the thesis: a belt, a light beam and a UR5e stacking boxes",
     "joints": "the thesis's example 1 (ch. 5): one Puma 260 moved in joint space",
     "pick-place": "the thesis's example 2 (ch. 5): pick and place with one Puma 260",
     "handoff": "the thesis's example 3 (ch. 5): two Puma 260s hand a sphere over",
@@ -200,6 +201,14 @@ def _demo(args: argparse.Namespace) -> int:
         from workcell.errors import ProgramError
 
         raise ProgramError(f"--dt must be > 0 s, got {args.dt}")
+    if args.example == "conveyor":
+        from workcell.examples.conveyor import demo
+
+        check_outputs(rrd=args.save, png=args.render, folder=args.mjcf)
+        return demo(
+            args.mode, args.dt, render=args.render, as_json=args.json, save=args.save,
+            mjcf=args.mjcf, physics=args.physics, record_fps=args.record_fps or None,
+        )  # fmt: skip
     if args.example == "obstacle":
         from workcell.examples.obstacle import demo
 
@@ -297,7 +306,7 @@ def _parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="raise (or lower) a work limit of workcell.limits for this run, e.g. "
         "--limit max_facets=2e6 (limits: max_facets, max_frames_per_command, max_frames, "
-        "max_spill_bytes, max_sim_time, max_file_bytes, max_coordinate)",
+        "max_spill_bytes, max_sim_time, max_file_bytes, max_coordinate, max_part_copies)",
     )
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run a built-in example")
@@ -306,7 +315,8 @@ def _parser() -> argparse.ArgumentParser:
         choices=["solids", *CELLS],
         help="solids: the thesis's example solids (ch. 2-3); joints, pick-place, handoff: "
         "its three example workcells (ch. 5); obstacle: a wall between two stages, the "
-        "direct program against pick/place",
+        "direct program against pick/place; conveyor: a belt, a light beam and a UR5e "
+        "stacking boxes, two programs run together (throughput and utilisation)",
     )
     demo.add_argument(
         "--mode",

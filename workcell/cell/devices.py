@@ -505,12 +505,13 @@ class DeviceItems:
 
 # ---------------------------------------------------------------------- JSON
 def devices_to_dict(cell: DeviceItems) -> dict[str, list[dict[str, Any]]]:
-    """The devices as JSON-able lists (lengths m, speeds m/s, times s)."""
+    """The devices as JSON-able lists (lengths m, speeds m/s, times s); a kind the cell
+    has none of is left out."""
 
     def plain(v: Any) -> Any:
         return v.tolist() if isinstance(v, np.ndarray) else v
 
-    return {
+    out = {
         "signals": [{"name": s.name, "initial": s.initial} for s in cell.signals.values()],
         "sensors": [
             {
@@ -548,6 +549,7 @@ def devices_to_dict(cell: DeviceItems) -> dict[str, list[dict[str, Any]]]:
             for s in cell.sinks.values()
         ],
     }
+    return {k: v for k, v in out.items() if v}  # a cell without devices: as before
 
 
 def add_devices(

@@ -254,6 +254,6 @@ def demo(
     print(f"{sim.frames} frames at dt = {dt:g} s; {out['collisions']} collision(s); "
           f"total {time.perf_counter() - t0:.2f} s")  # fmt: skip
     for key, what in (("png", "picture"), ("rrd", "recording"), ("mjcf", "cell")):
-        if key in out:
+        if out.get(key):
             print(f"{what} written to {out[key]}")
     return 0

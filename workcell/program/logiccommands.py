@@ -85,7 +85,9 @@ _pose_or_point.label = "number[4][4] | number[3]"  # type: ignore[attr-defined]
 def _programs(v: object, what: str) -> tuple[tuple[str, str], ...]:
     """A mapping of program names to ``.wcl`` file names."""
     if not isinstance(v, dict) or not v:
-        raise ProgramError(f"{what} must be an object of program names to .wcl files, got {shown(v)}")
+        raise ProgramError(
+            f"{what} must be an object of program names to .wcl files, got {shown(v)}"
+        )
     return tuple((a.name(k, f"{what} name"), a.file_name(f, f"{what} '{k}'")) for k, f in v.items())
 
 
@@ -292,10 +294,11 @@ class RunPrograms(Command, wire="run_programs"):
         given = dict(self.programs) if self.programs is not None else dict(session.programs)
         if not given:
             raise ProgramError(
-                "run_programs: no programs: name them first ('program ROBOT FILE.wcl') or "
-                "give them"
+                "run_programs: no programs: name them first ('program ROBOT FILE.wcl') or give them"
             )
-        files = {k: (f if session.root is not None else str(session.path(f))) for k, f in given.items()}
+        files = {
+            k: (f if session.root is not None else str(session.path(f))) for k, f in given.items()
+        }
         return run_programs(sim, files, until=self.until, root=session.root)
 
 
@@ -335,7 +338,11 @@ def format_logic(command: Command, result: Any) -> str | None:
     if isinstance(command, (Signal, Signals)):
         return "\n".join(f"{k} = {format_value(v)}" for k, v in result.items()) or "no signals"
     if isinstance(command, Distance):
-        return "nothing within range" if result is None or result == float("inf") else f"{result:.6g} m"
+        return (
+            "nothing within range"
+            if result is None or result == float("inf")
+            else f"{result:.6g} m"
+        )
     if isinstance(command, Programs):
         return "\n".join(f"{k}: {f}" for k, f in result.items()) or "no programs named yet"
     if isinstance(command, RunPrograms):
@@ -351,7 +358,9 @@ def format_logic(command: Command, result: Any) -> str | None:
             lines.append(f"  sink {k}: {v['parts']} parts, {v['parts_per_hour']:.4g} per hour")
         for k, v in result["signals"].items():
             if v["rising"]:
-                lines.append(f"  signal {k}: rose {v['rising']} times, {v['per_hour']:.4g} per hour")
+                lines.append(
+                    f"  signal {k}: rose {v['rising']} times, {v['per_hour']:.4g} per hour"
+                )
         for k, v in result["robots"].items():
             lines.append(
                 f"  robot {k}: moving {100 * v['moving']:.1f} %, waiting "

@@ -99,7 +99,7 @@ class Session:
         if self.cell is None:
             raise ProgramError(
                 "no cell yet: start one with 'cell new NAME', 'cell load FILE' or "
-                "'cell example joints|pick-place|handoff|obstacle'"
+                "'cell example joints|pick-place|handoff|obstacle|conveyor'"
             )
         return self.cell
 
