@@ -289,6 +289,14 @@ class DeviceItems:
         """Copy names reserved by sources: copy name -> source name."""
         return {c: s.name for s in self._sources.values() for c in s.copies}
 
+    def pattern_of(self, name: str) -> str:
+        """The movable part whose geometry ``name`` has: a source's copy's pattern, else
+        ``name`` itself."""
+        for s in self._sources.values():
+            if name.startswith(f"{s.part}_") and name in s.copies:
+                return s.part
+        return name
+
     def signal_kind(self, name: str) -> str:
         """The kind of signal ``name`` (a declared signal or a sensor's): ``"bool"``,
         ``"int"`` or ``"float"``; ModelError listing the signals when unknown."""

@@ -52,7 +52,7 @@ from workcell.plan.support import geom_vertices
 if TYPE_CHECKING:
     from workcell.sim.simulator import Simulator
 
-__all__ = ["RESTING", "TIME_EPS", "CellLogic", "format_value", "same_value"]
+__all__ = ["RESTING", "TIME_EPS", "CellLogic", "SensorReader", "format_value", "same_value"]
 
 Array = NDArray[np.float64]
 RESTING = 1e-3  # m: a part whose lowest point is this close to a belt's top rests on it
@@ -95,21 +95,11 @@ class CellLogic:
         self.edge = {s.name: False for s in self.sources}
         self.sunk = {s.name: 0 for s in self.sinks}
         self.warned: set[str] = set()
-        self.distances: dict[str, float] = {
-            s.name: math.inf for s in self.sensors if s.kind == "proximity"
-        }
+        self.reader = SensorReader(sim, m, sim.data)
+        self.distances = self.reader.distances
         self.watch: dict[str, list[SignalValue]] = {}
         self.stop = False
         self.t_prev = 0.0
-        robot_body = np.zeros(m.nbody, dtype=bool)
-        prefixes = tuple(cc.robot_prefixes.values())
-        for b in range(1, m.nbody):
-            robot_body[b] = m.body(b).name.startswith(prefixes) if prefixes else False
-        self.robot_body = robot_body
-        self.tool_sites = np.array([sim._site[r] for r in sim._qadr], dtype=np.intp)
-        self.groups = np.zeros(6, np.uint8)
-        self.groups[:COLLISION_GROUP] = 1  # visual geometry (the floor is group 0)
-        self._hit = np.zeros(1, np.int32)
 
     @classmethod
     def of(cls, sim: Simulator) -> CellLogic | None:
@@ -381,28 +371,69 @@ class CellLogic:
 
     def _sense(self, t: float, index: int) -> None:
         data = {"source": "sensor"}
+        for name, value in self.reader.read():
+            self.set(name, value, t, index, data)
+
+
+class SensorReader:
+    """Reads the cell's sensors on a model and its data (the simulator's, or a physics
+    run's copy: :mod:`workcell.sim.physics_devices`; module doc, 4.): :meth:`read` gives
+    each sensor's value, :attr:`distances` the proximity sensors' distances (m). Parked
+    parts are left out; robot bodies unless a sensor asks for them."""
+
+    def __init__(self, sim: Any, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        cc = sim.compiled
+        self.model, self.data = model, data
+        self.sensors = list(sim.cell.sensors.values())
+        parts = list(cc.part_bodies)
+        self.bodies = np.array([model.body(cc.part_bodies[p]).id for p in parts], dtype=np.intp)
+        self.c_local = np.array([sim._centroids[p] for p in parts]).reshape(-1, 3)
+        robot_body = np.zeros(model.nbody, dtype=bool)
+        prefixes = tuple(cc.robot_prefixes.values())
+        for b in range(1, model.nbody):
+            robot_body[b] = model.body(b).name.startswith(prefixes) if prefixes else False
+        self.robot_body = robot_body
+        self.tool_sites = np.array(
+            [model.site(cc.tool_sites[r]).id for r in cc.tool_sites], dtype=np.intp
+        )
+        self.groups = np.zeros(6, np.uint8)
+        self.groups[:COLLISION_GROUP] = 1  # visual geometry (the floor is group 0)
+        self._hit = np.zeros(1, np.int32)
+        self.distances: dict[str, float] = {
+            s.name: math.inf for s in self.sensors if s.kind == "proximity"
+        }
+
+    def read(self) -> list[tuple[str, bool]]:
+        """(sensor, value) for every sensor, on the data's current poses."""
+        out = []
         for s in self.sensors:
+            p = s.params
             if s.kind == "presence":
                 value = self._presence(s)
+            elif s.kind == "beam":
+                value = (
+                    self._ray(p["start"], p["end"] - p["start"], 1.0, False, s.robots) is not None
+                )
             else:
-                p = s.params
-                if s.kind == "beam":
-                    x = self._ray(p["start"], p["end"] - p["start"], 1.0, False, s.robots)
-                    value = x is not None
-                else:
-                    x = self._ray(p["origin"], p["direction"], p["range"], True, s.robots)
-                    dist = math.inf if x is None else x
-                    self.distances[s.name] = dist
-                    value = dist <= p["threshold"]
-            self.set(s.name, value, t, index, data)
+                x = self._ray(p["origin"], p["direction"], p["range"], True, s.robots)
+                dist = math.inf if x is None else x
+                self.distances[s.name] = dist
+                value = dist <= p["threshold"]
+            out.append((s.name, value))
+        return out
 
     def _presence(self, s: Any) -> bool:
+        d = self.data
         c, h = s.params["center"], s.params["size"] / 2
-        idx = np.flatnonzero(self.present)
-        if len(idx) and np.any(np.all(np.abs(self._centroids(idx) - c) <= h, axis=1)):
-            return True
+        here = d.xpos[self.bodies, 2] < PARKED_ABOVE
+        b = self.bodies[here]
+        if len(b):
+            R = d.xmat[b].reshape(-1, 3, 3)
+            C = d.xpos[b] + np.einsum("kij,kj->ki", R, self.c_local[here])
+            if np.any(np.all(np.abs(C - c) <= h, axis=1)):
+                return True
         if s.robots and len(self.tool_sites):
-            P = self.sim.data.site_xpos[self.tool_sites]
+            P = d.site_xpos[self.tool_sites]
             return bool(np.any(np.all(np.abs(P - c) <= h, axis=1)))
         return False
 
@@ -411,7 +442,7 @@ class CellLogic:
     ) -> float | None:
         """The first hit (in units of ``vec``) within ``reach`` along ``start + x vec``,
         skipping robot bodies unless ``robots``; None when nothing is hit."""
-        m, d = self.sim.model, self.sim.data
+        m, d = self.model, self.data
         pnt, travelled, exclude = np.array(start, dtype=np.float64), 0.0, -1
         for _ in range(8):
             x = mujoco.mj_ray(m, d, pnt, vec, self.groups, static, exclude, self._hit)
