@@ -353,18 +353,7 @@ def format_logic(command: Command, result: Any) -> str | None:
             lines += [f"  {line}" for line in r.get("output", [])]
         return "\n".join(lines)
     if isinstance(command, Throughput):
-        lines = [f"over {result['time_s']:.6g} s of simulated time:"]
-        for k, v in result["sinks"].items():
-            lines.append(f"  sink {k}: {v['parts']} parts, {v['parts_per_hour']:.4g} per hour")
-        for k, v in result["signals"].items():
-            if v["rising"]:
-                lines.append(
-                    f"  signal {k}: rose {v['rising']} times, {v['per_hour']:.4g} per hour"
-                )
-        for k, v in result["robots"].items():
-            lines.append(
-                f"  robot {k}: moving {100 * v['moving']:.1f} %, waiting "
-                f"{100 * v['waiting']:.1f} %, idle {100 * v['idle']:.1f} %"
-            )
-        return "\n".join(lines)
+        from workcell.sim.throughput import format_throughput
+
+        return format_throughput(result)
     return None

@@ -25,7 +25,7 @@ from typing import Any
 
 from workcell.sim.timeline import Event
 
-__all__ = ["WAIT_COMMANDS", "activity", "throughput"]
+__all__ = ["WAIT_COMMANDS", "activity", "format_throughput", "throughput"]
 
 WAIT_COMMANDS = ("wait", "wait_signal")
 
@@ -109,3 +109,19 @@ def throughput(
         "signals": {k: {"rising": n, "per_hour": per_hour(n)} for k, n in rising.items()},
         "robots": out_robots,
     }
+
+
+def format_throughput(result: dict[str, Any]) -> str:
+    """:func:`throughput`'s result as text for people."""
+    lines = [f"over {result['time_s']:.6g} s of simulated time:"]
+    for k, v in result["sinks"].items():
+        lines.append(f"  sink {k}: {v['parts']} parts, {v['parts_per_hour']:.4g} per hour")
+    for k, v in result["signals"].items():
+        if v["rising"]:
+            lines.append(f"  signal {k}: rose {v['rising']} times, {v['per_hour']:.4g} per hour")
+    for k, v in result["robots"].items():
+        lines.append(
+            f"  robot {k}: moving {100 * v['moving']:.1f} %, waiting {100 * v['waiting']:.1f} %, "
+            f"idle {100 * v['idle']:.1f} %"
+        )
+    return "\n".join(lines)
