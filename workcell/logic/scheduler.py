@@ -69,7 +69,7 @@ from workcell.sim.devices import TIME_EPS, format_value, same_value
 if TYPE_CHECKING:
     from workcell.sim.simulator import Simulator
 
-__all__ = ["ProgramBlock", "Run", "run_programs"]
+__all__ = ["ProgramBlock", "Run", "check_run", "run_programs"]
 
 Array = NDArray[np.float64]
 _SCHEDULER = "\0scheduler"
@@ -91,6 +91,13 @@ def run_programs(
     """Run ``programs`` together on ``sim`` (module doc); ``root``: ``.wcl`` file names
     resolve inside it. Returns per program ``state`` ("done" or "stopped"), ``t_end``
     (s), ``robot`` and, for ``.wcl`` programs, ``output`` (the lines they printed)."""
+    check_run(sim, until)
+    progs = programs_of(sim, programs, root=root)
+    return Run(sim, progs, None if until is None else float(until)).execute()
+
+
+def check_run(sim: Simulator, until: float | None) -> None:
+    """ProgramError when ``sim`` cannot run programs now or ``until`` is no time after now."""
     if sim._block is not None:
         raise ProgramError("run_programs cannot run inside concurrently() or another run")
     if sim.mode == "joint-by-joint":
@@ -104,8 +111,6 @@ def run_programs(
                 f"got {shown(until)}"
             )
         limits.check("max_sim_time", float(until), "run_programs: until")
-    progs = programs_of(sim, programs, root=root)
-    return Run(sim, progs, None if until is None else float(until)).execute()
 
 
 class ProgramBlock(_Block):

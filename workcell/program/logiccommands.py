@@ -288,9 +288,10 @@ class RunPrograms(Command, wire="run_programs"):
     until: float | None = arg(_opt_number, None, "s")
 
     def execute(self, session: Session) -> dict[str, Any]:
-        from workcell.logic.scheduler import run_programs
+        from workcell.logic.scheduler import check_run, run_programs
 
         sim = session.require_sim()
+        check_run(sim, self.until)
         given = dict(self.programs) if self.programs is not None else dict(session.programs)
         if not given:
             raise ProgramError(
