@@ -358,3 +358,24 @@ def test_a_wcl_program_runs_beside_a_python_one(tmp_path):
     fresh = Simulator(cell, dt=0.01)
     with pytest.raises(ProgramError, match="cannot run inside a program"):
         fresh.run_programs({"b": tmp_path / "bad.wcl"})
+
+
+def test_one_program_in_a_live_cell_gives_the_frames_of_its_direct_run():
+    """Belts, sources and sensors on every frame: the same frames either way (the timed
+    source makes its copies at the frames the robot's motion makes)."""
+    from workcell.examples import conveyor as cv
+
+    def motions(sim):
+        sim.move_end_effector(cv.ROBOT, cv.tool_down(cv.pick_position() + [0, 0, 0.1]))
+        sim.move_linear(cv.ROBOT, cv.tool_down(cv.pick_position() + [0, 0, 0.2]), speed=0.3)
+        sim.wait(6.5)  # the cell alive: a frame every dt, a copy at 6 s
+        sim.move_joints_absolute(cv.ROBOT, "home")
+
+    direct = Simulator(cv.build(), dt=0.01, profile="jerk")
+    motions(direct)
+    run = Simulator(cv.build(), dt=0.01, profile="jerk")
+    run.run_programs({cv.ROBOT: motions})
+    np.testing.assert_allclose(run.timeline.sim_times(), direct.timeline.sim_times(), atol=1e-12)
+    np.testing.assert_allclose(run.timeline.qpos(), direct.timeline.qpos(), atol=1e-12)
+    kinds = lambda s: [(e.kind, e.detail) for e in s.events if e.kind in ("signal", "source")]  # noqa: E731
+    assert kinds(run) == kinds(direct)

@@ -444,19 +444,23 @@ class Run:
                 return
 
     def _frame_times(self, now: float, t_win: float) -> Array:
+        """The frames in (now, t_win]: the moving robots' own sample times and t_win;
+        while the cell is alive, gaps longer than dt between them are filled every dt (and
+        at the timed sources' times, :meth:`Simulator._time_grid`)."""
         sim = self.sim
         parts = [np.array([t_win])]
         for ms in self.flight.values():
             for i in ms:
                 t = self.block.moves[i].times
                 parts.append(t[(t > now + TIME_EPS) & (t <= t_win + TIME_EPS)])
+        times = _merged(parts, now, t_win)
         logic = sim._logic
         if logic is not None and logic.alive():
-            parts.append(sim._time_grid(now, t_win))
-        times = np.unique(np.concatenate(parts))
-        times = times[times > now + TIME_EPS]
-        times = times[np.concatenate([np.diff(times) > TIME_EPS, [True]])]
-        times[-1] = t_win
+            edges = np.concatenate([[now], times])
+            gaps = np.flatnonzero(np.diff(edges) > sim.dt + TIME_EPS)
+            if len(gaps):
+                fill = [sim._time_grid(edges[g], edges[g + 1]) for g in gaps]
+                times = _merged([times, *fill], now, t_win)
         return times
 
     def _rows(self, now: float, times: Array) -> Array:
@@ -591,3 +595,13 @@ class Run:
                 self.sim.sim_time, robot, "error", f"{type(exc).__name__}: {exc}"
             )
         return exc
+
+
+def _merged(parts: list[Array], now: float, end: float) -> Array:
+    """The sorted times of ``parts`` in (now, end], those closer than TIME_EPS as one,
+    the last exactly ``end``."""
+    times = np.unique(np.concatenate(parts))
+    times = times[times > now + TIME_EPS]
+    times = times[np.concatenate([np.diff(times) > TIME_EPS, [True]])]
+    times[-1] = end
+    return times
