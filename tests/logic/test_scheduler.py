@@ -366,8 +366,10 @@ def test_one_program_in_a_live_cell_gives_the_frames_of_its_direct_run():
     from workcell.examples import conveyor as cv
 
     def motions(sim):
-        sim.move_end_effector(cv.ROBOT, cv.tool_down(cv.pick_position() + [0, 0, 0.1]))
-        sim.move_linear(cv.ROBOT, cv.tool_down(cv.pick_position() + [0, 0, 0.2]), speed=0.3)
+        sim.move_end_effector(cv.ROBOT, cv.tool_down(cv.pick_position() + np.array([0, 0, 0.1])))
+        sim.move_linear(
+            cv.ROBOT, cv.tool_down(cv.pick_position() + np.array([0, 0, 0.2])), speed=0.3
+        )
         sim.wait(6.5)  # the cell alive: a frame every dt, a copy at 6 s
         sim.move_joints_absolute(cv.ROBOT, "home")
 

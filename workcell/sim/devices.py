@@ -241,10 +241,7 @@ class CellLogic:
         return held
 
     def _centroids(self, idx: NDArray[np.intp]) -> Array:
-        d = self.sim.data
-        b = self.bodies[idx]
-        R = d.xmat[b].reshape(-1, 3, 3)
-        return d.xpos[b] + np.einsum("kij,kj->ki", R, self.c_local[idx])
+        return _centroids(self.sim.data, self.bodies[idx], self.c_local[idx])
 
     def _world_verts(self, i: int) -> Array:
         """World vertices of part i's collision pieces."""
@@ -370,9 +367,10 @@ class CellLogic:
         self.present[i] = False
 
     def _sense(self, t: float, index: int) -> None:
-        data = {"source": "sensor"}
+        values = self.values
         for name, value in self.reader.read():
-            self.set(name, value, t, index, data)
+            if values[name] is not value:  # sensors' values are the bools True and False
+                self.set(name, value, t, index, {"source": "sensor"})
 
 
 class SensorReader:
@@ -399,6 +397,7 @@ class SensorReader:
         self.groups = np.zeros(6, np.uint8)
         self.groups[:COLLISION_GROUP] = 1  # visual geometry (the floor is group 0)
         self._hit = np.zeros(1, np.int32)
+        self._here: Array | None = None
         self.distances: dict[str, float] = {
             s.name: math.inf for s in self.sensors if s.kind == "proximity"
         }
@@ -406,6 +405,7 @@ class SensorReader:
     def read(self) -> list[tuple[str, bool]]:
         """(sensor, value) for every sensor, on the data's current poses."""
         out = []
+        self._here = None  # the parts' centroids, once per reading
         for s in self.sensors:
             p = s.params
             if s.kind == "presence":
@@ -425,13 +425,12 @@ class SensorReader:
     def _presence(self, s: Any) -> bool:
         d = self.data
         c, h = s.params["center"], s.params["size"] / 2
-        here = d.xpos[self.bodies, 2] < PARKED_ABOVE
-        b = self.bodies[here]
-        if len(b):
-            R = d.xmat[b].reshape(-1, 3, 3)
-            C = d.xpos[b] + np.einsum("kij,kj->ki", R, self.c_local[here])
-            if np.any(np.all(np.abs(C - c) <= h, axis=1)):
-                return True
+        if self._here is None:
+            here = d.xpos[self.bodies, 2] < PARKED_ABOVE
+            self._here = _centroids(d, self.bodies[here], self.c_local[here])
+        C = self._here
+        if len(C) and np.any(np.all(np.abs(C - c) <= h, axis=1)):
+            return True
         if s.robots and len(self.tool_sites):
             P = d.site_xpos[self.tool_sites]
             return bool(np.any(np.all(np.abs(P - c) <= h, axis=1)))
@@ -467,6 +466,12 @@ class _Belt:
         self.half_width = c.width / 2
         self.top = c.top
         self.end_u = float(c.end @ self.u)
+
+
+def _centroids(d: mujoco.MjData, bodies: NDArray[np.intp], c_local: Array) -> Array:
+    """World centroids (k, 3) of ``bodies`` whose centroids are ``c_local`` in their frames."""
+    R = d.xmat[bodies].reshape(-1, 3, 3)
+    return d.xpos[bodies] + np.matmul(R, c_local[:, :, None])[:, :, 0]
 
 
 def _quat(T: Array) -> Array:
