@@ -96,11 +96,10 @@ def gantt_chart(
     ax.set_xlabel("simulated time (s)")
     ax.grid(True, axis="x", alpha=0.3)
     ax.set_title(_title(sim))
-    ax.legend(
+    fig.legend(
         handles=[Patch(color=COLOURS[k], label=k) for k in ("moving", "waiting", "idle")]
         + ([Patch(color=COLOURS["signal"], label="signal true")] if signals else []),
-        loc="upper center", bbox_to_anchor=(0.5, -0.18 if n < 4 else -0.08), ncol=4,
-        frameon=False, fontsize=9,
+        loc="outside lower center", ncol=4, frameon=False, fontsize=9,
     )  # fmt: skip
     buf = io.BytesIO()
     fig.savefig(buf, format="rgba", dpi=dpi)
