@@ -5,6 +5,7 @@ a clear error and changes nothing, in each of them."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from conftest import snapshot
 
@@ -250,3 +251,21 @@ def test_bad_logic_requests_to_the_server_change_nothing(server, call, error, wo
         with pytest.raises(error, match=words):
             call(c)
         assert (c.frames, c.signals(), c.cell.to_dict()) == before
+
+
+def test_the_conveyor_programs_in_the_language_stack_two_boxes(tmp_path):
+    from pathlib import Path
+
+    from workcell.program.interpreter import run_script
+
+    assets = Path(__file__).resolve().parents[2] / "assets"
+    lines: list[str] = []
+    session = run_script(assets / "conveyor_programs.wcl", out=lines.append)
+    sim = session.sim
+    end = sim.part_positions()
+    # where the robot's program sets them down: the stack places written in the file
+    assert np.allclose(end["box_1"], [0.355, -0.395, 0.325], atol=1e-6)
+    assert np.allclose(end["box_2"], [0.445, -0.395, 0.325], atol=1e-6)
+    assert sim.throughput()["signals"]["placed"]["rising"] == 2
+    assert sim.summary()["collisions"] == 0
+    assert "program controller: done" in "\n".join(lines)

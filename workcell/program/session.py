@@ -147,10 +147,13 @@ class Session:
             return []
         if kind == "robot":
             return list(self.sim.robots) if self.sim is not None else list(cell.robots)
+        movable = list(cell.movable_parts)
+        if self.sim is not None:  # and the copies sources make (workcell.cell.devices)
+            movable += [p for p in self.sim.compiled.part_bodies if p not in cell.movable_parts]
         if kind == "part":
-            return [*cell.static_parts, *cell.movable_parts]
+            return [*cell.static_parts, *movable]
         if kind == "movable":
-            return list(cell.movable_parts)
+            return movable
         if kind == "cellitem":
             return cell.names()
         if kind == "signal":
