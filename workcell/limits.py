@@ -20,6 +20,9 @@ limit                       default        what it bounds
                                            any entry of a transform's 3x3 part
 ``max_part_copies``         100            copies a part source without a ``count`` makes
                                            (each is a body of the compiled model)
+``max_native_seconds``      120 s          wall time of one native geometry job in a child
+                                           process (a convex decomposition)
+``max_native_bytes``        3 GiB          address space of such a child process
 ==========================  =============  ==================================================
 
 Raise (or lower) them for a block of code, in this thread only::
@@ -52,6 +55,7 @@ __all__ = [
     "Limits",
     "check",
     "current",
+    "exceeded",
     "parse_limit",
     "set_limits",
     "using",
@@ -77,6 +81,8 @@ class Limits:
     max_file_bytes: int = _limit(256 << 20, "bytes", "a file read (model, cell, script)")
     max_coordinate: float = _limit(1e6, "m", "a coordinate, length or transform entry")
     max_part_copies: int = _limit(100, "copies", "copies made by a source without a count")
+    max_native_seconds: float = _limit(120.0, "s", "one native geometry job (child process)")
+    max_native_bytes: int = _limit(3 << 30, "bytes", "a native geometry child's memory")
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -161,12 +167,17 @@ def check(name: str, amount: float, what: str) -> None:
     ``what`` names the work, e.g. ``"sphere 's'"``. Call it before the work starts;
     ``amount`` may be a float estimate (inf and NaN are over every limit).
     """
-    lim = current()
-    bound = getattr(lim, name)
-    if amount <= bound:  # False for NaN
+    if amount <= getattr(current(), name):  # False for NaN
         return
+    raise exceeded(name, amount, what)
+
+
+def exceeded(name: str, amount: float, what: str) -> LimitError:
+    """The LimitError saying that ``what`` needs ``amount`` of limit ``name``, over it
+    (for work stopped when it reaches a limit, e.g. a child process out of time)."""
+    bound = getattr(current(), name)
     unit = Limits.__dataclass_fields__[name].metadata["unit"]
-    raise LimitError(
+    return LimitError(
         f"{what}: {_fmt(amount)} {unit} is over the limit {name} = {_fmt(bound)} {unit}; "
         f"raise it with workcell.limits.using({name}=...) in Python or "
         f"'workcell --limit {name}=N ...' on the command line"

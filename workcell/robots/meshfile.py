@@ -35,6 +35,7 @@ import numpy as np
 import trimesh
 
 from workcell import limits
+from workcell.checks import check_size
 from workcell.errors import ModelError
 from workcell.files import read_bytes
 
@@ -177,7 +178,8 @@ def primitive(kind: str, *, size: tuple[float, ...] = (), what: str = "shape") -
     """A closed mesh centred on the origin (m): ``box`` (size = full x, y, z extents),
     ``cylinder`` (radius, full length along z), ``sphere`` (radius), ``capsule`` (radius,
     distance between the caps' centres, along z), ``ellipsoid`` (three radii).
-    ModelError naming ``what`` for sizes that are not positive."""
+    ModelError naming ``what`` for sizes that are not positive, DegenerateError (also a
+    ModelError) for sizes under :data:`~workcell.checks.MIN_LENGTH`."""
     s = tuple(float(v) for v in size)
     need = {"box": 3, "cylinder": 2, "sphere": 1, "capsule": 2, "ellipsoid": 3}
     if kind not in need:
@@ -187,6 +189,9 @@ def primitive(kind: str, *, size: tuple[float, ...] = (), what: str = "shape") -
         ok = True  # a capsule of length 0 is a sphere
     if not ok:
         raise ModelError(f"{what}: a {kind} needs {need[kind]} positive size(s), got {list(s)}")
+    for k, v in enumerate(s):
+        if not (kind == "capsule" and k == 1 and v == 0):
+            check_size(f"{what}: a {kind}", f"size {k + 1}", v)
     limits.check("max_coordinate", max(s), what)
     if kind == "box":
         return trimesh.creation.box(extents=s)
