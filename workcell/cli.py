@@ -185,7 +185,7 @@ def _demo(args: argparse.Namespace) -> int:
 
         raise ProgramError(f"--dt must be > 0 s, got {args.dt}")
     if args.example == "conveyor":
-        from workcell.examples.conveyor import demo
+        from workcell.record.conveyor_demo import demo
 
         check_outputs(rrd=args.save, png=args.render, folder=args.mjcf)
         return demo(

@@ -64,6 +64,7 @@ __all__ = [
     "SENSOR_PARAMETERS",
     "STOP_HEIGHT",
     "STOP_THICKNESS",
+    "TIME_EPS",
     "Conveyor",
     "DeviceItems",
     "Sensor",
@@ -75,6 +76,8 @@ __all__ = [
     "check_signal_value",
     "copy_names",
     "devices_to_dict",
+    "format_value",
+    "same_value",
 ]
 
 Array = NDArray[np.float64]
@@ -92,6 +95,7 @@ BELT_THICKNESS = 0.02  # m: the belt slab under the top surface
 STOP_THICKNESS = 0.01  # m: the end stop plate, along the belt
 STOP_HEIGHT = 0.03  # m: how far the end stop rises above the belt
 MAX_SPEED = 10.0  # m/s: the fastest belt
+TIME_EPS = 1e-9  # s: simulated times closer than this are one time
 
 
 def _vec3(value: object, what: str) -> Array:
@@ -130,6 +134,18 @@ def check_signal_value(value: object, what: str) -> SignalValue:
     if isinstance(value, (float, np.floating)) and math.isfinite(float(value)):
         return float(value)
     raise ModelError(f"{what} must be a bool, an int or a finite float, got {shown(value)}")
+
+
+def format_value(v: object) -> str:
+    """A signal value as people read it: true/false, 3, 0.25."""
+    if isinstance(v, (bool, np.bool_)):
+        return "true" if v else "false"
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+
+def same_value(a: object, b: object) -> bool:
+    """Whether two signal values are equal (a bool equals only a bool)."""
+    return a == b and isinstance(a, bool) == isinstance(b, bool)
 
 
 def _read_only(a: Array) -> Array:

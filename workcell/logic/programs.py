@@ -19,9 +19,12 @@ property of :class:`~workcell.sim.simulator.Simulator`, with these differences:
 - a program that makes :data:`MAX_CALLS_AT_ONE_TIME` calls without simulated time passing
   (a busy loop) gets a ProgramError.
 
-A ``.wcl`` program runs in a :class:`ProgramSession` on that view: lines that would
-replace the session's cell or simulator (``cell load``, ``simulate``) are refused; what
-its lines print is kept in the run's result.
+A ``.wcl`` program runs in the command language on that view
+(:mod:`workcell.program.wcl_programs`: lines that would replace the session's cell or
+simulator, ``cell load``, ``simulate``, are refused; what its lines print is kept in the
+run's result). The language lives above the simulator, so this package does not import
+it: it plugs its loader into :data:`PROGRAM_FILES` (and names it as an entry point of
+the installed package).
 """
 
 from __future__ import annotations
@@ -37,18 +40,22 @@ from workcell.errors import ProgramError
 
 if TYPE_CHECKING:
     from workcell.logic.scheduler import Run
-    from workcell.sim.simulator import Simulator
 
 __all__ = [
     "MAX_CALLS_AT_ONE_TIME",
     "MAX_PROGRAMS",
+    "PROGRAM_FILES",
     "ROBOT_COMMANDS",
     "Program",
-    "ProgramSession",
     "ProgramSim",
+    "file_loader",
     "programs_of",
 ]
 
+PROGRAM_FILES: dict[str, Callable[..., Callable[[Any], object]]] = {}
+"""Loaders of program files by suffix: ``loader(path, root, name)`` checks the file (its
+syntax, whole) and returns the program's body (a callable given the program's
+:class:`ProgramSim`); the command language registers ".wcl" (:mod:`workcell.program`)."""
 MAX_PROGRAMS = 64  # programs one run_programs may run
 MAX_CALLS_AT_ONE_TIME = 100_000  # calls a program may make without simulated time passing
 ROBOT_COMMANDS = frozenset(
@@ -94,7 +101,7 @@ class Program:
 
 
 def programs_of(
-    sim: Simulator,
+    sim: Any,
     programs: object,
     *,
     root: str | os.PathLike | None = None,
@@ -127,12 +134,13 @@ def programs_of(
                 f"got {shown(body)}"
             )
         path = _resolve(body, root)
-        from workcell.files import read_text
-        from workcell.program.interpreter import check_script
-
-        text = read_text(path, what="program", error=ProgramError)
-        check_script(text, str(body))
-        out.append(Program(name, robot, _wcl_body(path, root, text), file=path))
+        loader = file_loader(".wcl")
+        if loader is None:
+            raise ProgramError(
+                f"run_programs: program '{name}': .wcl files run in the command language, "
+                "which is not loaded: import workcell.program first (or install the package)"
+            )
+        out.append(Program(name, robot, loader(path, root, str(body)), file=path))
     return out
 
 
@@ -144,43 +152,19 @@ def _resolve(path: str | os.PathLike, root: str | os.PathLike | None) -> Path:
     return Path(path).expanduser()
 
 
-def _wcl_body(path: Path, root: str | os.PathLike | None, text: str) -> Callable[[Any], None]:
-    """The body of a ``.wcl`` program: its lines on a :class:`ProgramSession`."""
+def file_loader(suffix: str) -> Callable[..., Callable[[Any], object]] | None:
+    """The loader of program files ending in ``suffix`` (".wcl"): registered in
+    :data:`PROGRAM_FILES` by the layer that runs them (the command language,
+    :mod:`workcell.program`, when it is imported), else found through the installed
+    package's entry points (group ``workcell.program_files``), else None."""
+    loader = PROGRAM_FILES.get(suffix)
+    if loader is None:
+        from importlib.metadata import entry_points
 
-    def body(view: ProgramSim) -> None:
-        from workcell.program.interpreter import Interpreter, QuitRequest
-        from workcell.program.lexer import split_lines
-
-        session = ProgramSession(view, base_dir=path.parent, root=root)
-        interp = Interpreter(session, view._program.output.append)
-        for i, line in enumerate(split_lines(text), 1):
-            try:
-                interp.run_line(line, f"{path}:{i}: ")
-            except QuitRequest:
-                return
-
-    return body
-
-
-def ProgramSession(view: ProgramSim, *, base_dir: Path, root: Any) -> Any:
-    """A :class:`~workcell.program.session.Session` on a program's view that refuses to
-    replace its cell or simulator (module doc)."""
-    from workcell.program.session import Session
-
-    class _Session(Session):
-        _locked = False
-
-        def __setattr__(self, name: str, value: Any) -> None:
-            if self._locked and name in ("sim", "cell", "_model"):
-                raise ProgramError(
-                    "this cannot run inside a program of run_programs: it would replace "
-                    "the cell or the simulation all programs share"
-                )
-            super().__setattr__(name, value)
-
-    s = _Session(sim=view, base_dir=base_dir, root=root)  # type: ignore[arg-type]
-    s._locked = True
-    return s
+        for ep in entry_points(group="workcell.program_files"):
+            if f".{ep.name}" == suffix:
+                PROGRAM_FILES[suffix] = loader = ep.load()
+    return loader
 
 
 class ProgramSim:

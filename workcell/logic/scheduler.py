@@ -1,6 +1,8 @@
 """``run_programs``: several programs on one simulated clock, each blocking only itself.
 
-A discrete-event scheduler above the simulator. Each program (:mod:`workcell.logic.programs`)
+A discrete-event scheduler that drives the simulator it is handed (``Simulator.run_programs``
+calls it; it works through that object and imports nothing of the simulator's package,
+which sits above it in the import layers, as the planners of :mod:`workcell.plan` do). Each program (:mod:`workcell.logic.programs`)
 runs in its own thread, but only one thread ever runs at a time: the scheduler hands
 control to one program, which runs at the current simulated time until it *blocks* (a
 motion, ``wait``, ``wait_signal``, or the end), and hands it back. Threads rather than
@@ -52,22 +54,19 @@ import math
 import os
 import threading
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
 from workcell import limits
+from workcell.cell.devices import TIME_EPS, format_value, same_value
 from workcell.checks import is_finite_number, shown
 from workcell.errors import DeadlockError, ProgramError, WorkcellError
 from workcell.logic.programs import MAX_CALLS_AT_ONE_TIME, Program, ProgramSim, programs_of
-from workcell.sim.concurrent import PlannedMove, _Block
-from workcell.sim.cycle import command_record
-from workcell.sim.devices import TIME_EPS, format_value, same_value
 
-if TYPE_CHECKING:
-    from workcell.sim.simulator import Simulator
+Simulator = Any  # the simulator it is handed (workcell.sim sits above: it calls this module)
 
 __all__ = ["ProgramBlock", "Run", "check_run", "run_programs"]
 
@@ -113,12 +112,17 @@ def check_run(sim: Simulator, until: float | None) -> None:
         limits.check("max_sim_time", float(until), "run_programs: until")
 
 
-class ProgramBlock(_Block):
-    """The run's block (module doc): moves kept per robot, commands other than motions
-    wait for the program's robot to stop instead of being refused."""
+class ProgramBlock:
+    """The run's block (module doc): like a ``concurrently()`` block
+    (:mod:`workcell.sim.concurrent`: ``start``, ``base``, ``clocks``, ``moves``), moves
+    kept per robot, but commands other than motions wait for the program's robot to stop
+    instead of being refused."""
 
     def __init__(self, run: Run) -> None:
-        super().__init__(run.sim.sim_time, run.sim.data.qpos.copy())
+        self.start = run.sim.sim_time
+        self.base = run.sim.data.qpos.copy()
+        self.clocks: dict[str, float] = {}
+        self.moves: list[Any] = []  # the simulator's PlannedMove records
         self.run = run
         self.releases = 0  # times control went back to the scheduler (frames.py reads it)
 
@@ -128,7 +132,7 @@ class ProgramBlock(_Block):
     def clock(self, sim: Simulator, robot: str) -> float:
         return max(self.clocks.get(robot, sim.sim_time), sim.sim_time)
 
-    def add(self, sim: Simulator, move: PlannedMove) -> None:
+    def add(self, sim: Simulator, move: Any) -> None:
         run = self.run
         if run.current is not None:
             run.owns(run.current, move.robot, move.command)
@@ -321,7 +325,7 @@ class Run:
         if seconds > 0:
             p.state, p.wake, p.since = "time", t0 + seconds, t0
             self._block_current()
-        rec = command_record(p.robot, "wait", t0, sim.sim_time - t0, "wait")
+        rec = self.sim._command_record(p.robot, "wait", t0, sim.sim_time - t0, "wait")
         rec["program_name"] = p.name
         sim.timeline.add_event(sim.sim_time, p.robot, "wait", f"wait {seconds:.6g} s", data=rec)
 
@@ -537,7 +541,7 @@ class Run:
             running.append(f"'{p.name}' ({what.get(p.state, p.state)})")
             if p.state in ("time", "signal"):
                 command = "wait" if p.state == "time" else "wait_signal"
-                rec = command_record(p.robot, command, p.since, now - p.since, "wait")
+                rec = sim._command_record(p.robot, command, p.since, now - p.since, "wait")
                 rec.update(program_name=p.name, note="stopped at until")
                 if p.waits_for is not None:
                     rec.update(signal=p.waits_for[0], value=p.waits_for[1])

@@ -11,7 +11,7 @@
   :mod:`workcell.client`).
 """
 
-from workcell.program import cellcommands, commands, simcommands, solidcommands
+from workcell.program import cellcommands, commands, simcommands, solidcommands, wcl_programs
 from workcell.program.base import COMMANDS, Command, from_wire
 from workcell.program.session import Session
 from workcell.program.targets import Target
@@ -26,4 +26,5 @@ __all__ = [
     "from_wire",
     "simcommands",
     "solidcommands",
+    "wcl_programs",
 ]

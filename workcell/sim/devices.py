@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workcell.cell.compile_devices import PARKED_ABOVE
-from workcell.cell.devices import SignalValue
+from workcell.cell.devices import TIME_EPS, SignalValue, format_value, same_value
 from workcell.meshgeoms import COLLISION_GROUP
 from workcell.plan.support import geom_vertices
 
@@ -56,15 +56,7 @@ __all__ = ["RESTING", "TIME_EPS", "CellLogic", "SensorReader", "format_value", "
 
 Array = NDArray[np.float64]
 RESTING = 1e-3  # m: a part whose lowest point is this close to a belt's top rests on it
-TIME_EPS = 1e-9  # s: times closer than this are one time
 _QUAT_ID = np.array([1.0, 0.0, 0.0, 0.0])
-
-
-def format_value(v: SignalValue) -> str:
-    """A signal value as people read it: true/false, 3, 0.25."""
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    return f"{v:.6g}" if isinstance(v, float) else str(v)
 
 
 class CellLogic:
@@ -478,8 +470,3 @@ def _quat(T: Array) -> Array:
     from workcell.spatial import quat_from_matrix
 
     return quat_from_matrix(T[:3, :3])
-
-
-def same_value(a: object, b: object) -> bool:
-    """Whether two signal values are equal (a bool equals only a bool)."""
-    return a == b and isinstance(a, bool) == isinstance(b, bool)

@@ -52,6 +52,8 @@ _CHUNK = 16384  # frames made at once while time passes
 class SignalCommands:
     """Signals and waits (a mixin of Simulator; module doc)."""
 
+    _command_record = staticmethod(command_record)  # for the scheduler below (workcell.logic)
+
     # ------------------------------------------------------------------ read-back
     def signal(self: Simulator, name: str) -> SignalValue:
         """The value of signal ``name`` (a declared signal or a sensor's)."""
