@@ -243,3 +243,23 @@ def test_signal_events_carry_name_value_and_time_for_export():
         "set_signal",
         "set_signal",
     ]
+
+
+def test_a_part_is_picked_off_a_running_belt_where_it_is_at_that_frame():
+    from workcell.examples import conveyor as cv
+    from workcell.sim.grasp import tool_down
+
+    sim = Simulator(cv.build(), dt=0.01, profile="jerk")
+    pick = cv.pick_position()
+    sim.move_end_effector(cv.ROBOT, tool_down(pick))  # open fingers across the belt
+    sim.wait_signal("beam", True)  # the belt keeps running: nothing stops it here
+    at_grasp = np.array(sim.part_positions()["box_1"])
+    assert sim.close_gripper(cv.ROBOT) == "box_1"
+    # the weld holds the part where it was at that frame (the tool point is at `pick`)
+    grasp = next(g for g in sim.grasps if g.kind == "grasp")
+    T = sim.gripper_pose(cv.ROBOT) @ np.vstack([np.column_stack([np.eye(3), grasp.pos]), [0, 0, 0, 1]])
+    assert np.allclose(T[:3, 3] + np.array(cv.BOX) / 2, at_grasp, atol=1e-9)
+    sim.move_linear(cv.ROBOT, tool_down(pick + np.array([0, 0, 0.1])), speed=0.25)
+    # lifted with the gripper, no longer carried along by the belt
+    assert np.allclose(sim.part_positions()["box_1"], at_grasp + [0, 0, 0.1], atol=1e-6)
+    assert sim.summary()["collisions"] == 0

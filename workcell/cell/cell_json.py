@@ -18,7 +18,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from workcell.cell.devices import add_devices, devices_to_dict
+from workcell.cell.devices import device_sections, devices_to_dict
 from workcell.cell.items import _NAME_RE
 from workcell.cell.robot_json import kinematics_json, robot_from_json, robot_json
 from workcell.errors import ModelError, WorkcellError
@@ -164,6 +164,7 @@ def cell_from_dict(
             "cameras",
             lambda e: cell.add_camera(e["name"], e["position"], e["target"], e["fovy"]),
         ),
+        *device_sections(cell),
     ]
     for key, add in sections:
         entries = data.get(key, [])
@@ -182,5 +183,4 @@ def cell_from_dict(
                 raise fail(where, f"missing field {exc}") from exc
             except (WorkcellError, TypeError, ValueError, OverflowError) as exc:
                 raise fail(where, exc) from exc
-    add_devices(cell, data, fail)
     return cell

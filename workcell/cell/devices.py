@@ -37,7 +37,7 @@ positions in world coordinates.
 
 Names are cell names, unique across everything the cell holds (a sensor's signal has the
 sensor's name). A failed ``add_*`` changes nothing. :func:`devices_to_dict` and
-:func:`add_devices` are the JSON form (:mod:`workcell.cell.cell_json`).
+:func:`device_sections` are the JSON form (:mod:`workcell.cell.cell_json`).
 """
 
 from __future__ import annotations
@@ -72,9 +72,9 @@ __all__ = [
     "SignalValue",
     "Sink",
     "Source",
-    "add_devices",
     "check_signal_value",
     "copy_names",
+    "device_sections",
     "devices_to_dict",
     "format_value",
     "same_value",
@@ -576,19 +576,15 @@ def devices_to_dict(cell: DeviceItems) -> dict[str, list[dict[str, Any]]]:
     return {k: v for k, v in out.items() if v}  # a cell without devices: as before
 
 
-def add_devices(
-    cell: DeviceItems,
-    data: Mapping[str, Any],
-    fail: Callable[[str, BaseException | str], Exception],
-) -> None:
-    """Add the devices of :func:`devices_to_dict` data to ``cell`` (signals first: the
-    others name them); ``fail(where, reason)`` makes the error naming the faulty place."""
+def device_sections(cell: DeviceItems) -> list[tuple[str, Callable[[dict[str, Any]], object]]]:
+    """(JSON key, how to add one entry) for each kind of device of :func:`devices_to_dict`,
+    signals first (the others name them): :mod:`workcell.cell.cell_json` reads them."""
 
     def sensor(e: dict[str, Any]) -> Sensor:
         params = {k: v for k, v in e.items() if k not in ("name", "kind", "robots")}
         return cell.add_sensor(e["name"], e["kind"], robots=e.get("robots", False), **params)
 
-    adders: list[tuple[str, Callable[[dict[str, Any]], object]]] = [
+    return [
         ("signals", lambda e: cell.add_signal(e["name"], e["initial"])),
         ("sensors", sensor),
         (
@@ -615,19 +611,3 @@ def add_devices(
         ),
         ("sinks", lambda e: cell.add_sink(e["name"], center=e["center"], size=e["size"])),
     ]
-    from workcell.errors import WorkcellError
-
-    for key, add in adders:
-        entries = data.get(key, [])
-        if not isinstance(entries, list):
-            raise fail(key, "expected a list")
-        for i, e in enumerate(entries):
-            where = f"{key}[{i}]"
-            try:
-                if not isinstance(e, dict):
-                    raise ModelError("expected a JSON object")
-                add(e)
-            except KeyError as exc:
-                raise fail(where, f"missing field {exc}") from exc
-            except (WorkcellError, TypeError, ValueError, OverflowError) as exc:
-                raise fail(where, exc) from exc

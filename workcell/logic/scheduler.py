@@ -271,14 +271,16 @@ class Run:
                 self.cond.notify_all()
 
     def _give(self, p: Program) -> None:
-        """Hand control to program ``p`` and wait until it blocks or ends."""
+        """Hand control to program ``p`` and wait until it blocks or ends (or, while the
+        run stops, until its thread is gone)."""
         self.current = p
-        p.state = "running"
+        if not self.stopping:
+            p.state = "running"
         with self.cond:
             self.turn = p.name
             self.cond.notify_all()
-            while self.turn != _SCHEDULER:
-                self.cond.wait()
+            while self.turn != _SCHEDULER and (not self.stopping or p.thread.is_alive()):
+                self.cond.wait(timeout=None if not self.stopping else 1.0)
         self.current = None
 
     def _block_current(self) -> None:
@@ -563,13 +565,7 @@ class Run:
             if t is None or not t.is_alive():
                 continue
             if p.state not in ("done", "failed", "stopped"):
-                self.current = p
-                with self.cond:
-                    self.turn = p.name
-                    self.cond.notify_all()
-                    while self.turn != _SCHEDULER and t.is_alive():
-                        self.cond.wait(timeout=1.0)
-                self.current = None
+                self._give(p)  # it raises _Stop where it waits, and ends
             t.join(timeout=5.0)
 
     def _finish(self) -> None:

@@ -21,8 +21,7 @@ joints, parts, grasps, clocks, speeds, timeline and the devices' state
 undone: what the others did stays, and so does what it did before it failed.
 
 Devices (:mod:`workcell.sim.devices`): in a cell with belts, sensors, sources or sinks,
-every frame is computed (playback mode too) and the devices are evaluated on it
-(:meth:`FrameRunner._emit_devices`).
+every frame is computed (playback mode too) and the devices are evaluated on it.
 """
 
 from __future__ import annotations
@@ -41,7 +40,6 @@ from workcell.sim.contacts import Penetration
 from workcell.sim.gripping import Carried
 
 if TYPE_CHECKING:
-    from workcell.sim.devices import CellLogic
     from workcell.sim.simulator import Simulator
 
 __all__ = ["FrameRunner"]
@@ -114,11 +112,8 @@ class FrameRunner:
         c0 = clock()
         check = self.check_collisions
         first = len(self.timeline)  # frame j of this batch becomes timeline frame first + j
-        logic = self._logic
-        if logic is not None:
-            walls = np.empty(k)
-            k = self._emit_devices(times, Q, carried, mover, first, logic, walls)
-        elif self.mode == "playback" and not carried and not check:
+        logic = self._logic  # the cell's devices (None: it has none)
+        if self.mode == "playback" and not carried and not check and logic is None:
             walls = np.full(k, clock())
             d.qpos[:] = Q[-1]
             mujoco.mj_kinematics(m, d)
@@ -132,8 +127,14 @@ class FrameRunner:
             )
             xpos, xquat = d.xpos, d.xquat
             p, q = np.empty(3), np.empty(4)
+            movers = logic is not None and logic.movers
+            if logic is not None:
+                logic.stop = False
             for j in range(k):
-                qpos[:] = Q[j]
+                if movers:  # parts keep the poses the devices gave them
+                    logic.carry_over(qpos, Q[j])
+                else:
+                    qpos[:] = Q[j]
                 kin(m, d)
                 if carried:
                     for g, adr, rp, rq in carried:
@@ -142,65 +143,22 @@ class FrameRunner:
                         qpos[adr + 3 : adr + 7] = q
                         Q[j, adr : adr + 7] = qpos[adr : adr + 7]
                     kin(m, d)
+                if logic is not None:
+                    logic.frame(float(times[j]), first + j)
+                    Q[j] = qpos
                 if check:
                     collide(m, d)
                     if d.ncon or self._touching:
                         pens = self.contacts.penetrations(d)
                         self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
                 walls[j] = clock()
+                if logic is not None and logic.stop:  # a watched signal took its value
+                    k = j + 1
+                    break
         self.timeline.extend(times[:k], w0 + (walls[:k] - c0), Q[:k])
         self.sim_time = float(times[k - 1])
         self._wall = w0 + (clock() - c0)
         return k
-
-    def _emit_devices(
-        self: Simulator,
-        times: Array,
-        Q: Array,
-        carried: list[Carried],
-        mover: str | None,
-        first: int,
-        logic: CellLogic,
-        walls: Array,
-    ) -> int:
-        """``_emit``'s frames for a cell with devices (:mod:`workcell.sim.devices`): every
-        frame is computed (playback mode too), the devices evaluated on it and the whole
-        state stored; stops after a frame on which a watched signal took its value.
-        Returns the number of frames made."""
-        m, d = self.model, self.data
-        qpos, kin, collide, mul = (
-            d.qpos,
-            mujoco.mj_kinematics,
-            mujoco.mj_collision,
-            mujoco.mju_mulPose,
-        )
-        xpos, xquat = d.xpos, d.xquat
-        p, q = np.empty(3), np.empty(4)
-        check, movers, clock = self.check_collisions, logic.movers, time.perf_counter
-        logic.stop = False
-        for j in range(len(times)):
-            if movers:
-                logic.carry_over(qpos, Q[j])
-            else:
-                qpos[:] = Q[j]
-            kin(m, d)
-            if carried:
-                for g, adr, rp, rq in carried:
-                    mul(p, q, xpos[g], xquat[g], rp, rq)
-                    qpos[adr : adr + 3] = p
-                    qpos[adr + 3 : adr + 7] = q
-                kin(m, d)
-            logic.frame(float(times[j]), first + j)
-            Q[j] = qpos
-            if check:
-                collide(m, d)
-                if d.ncon or self._touching:
-                    pens = self.contacts.penetrations(d)
-                    self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
-            walls[j] = clock()
-            if logic.stop:
-                return j + 1
-        return len(times)
 
     def _contact_events(
         self: Simulator,
