@@ -261,5 +261,5 @@ def test_a_part_is_picked_off_a_running_belt_where_it_is_at_that_frame():
     assert np.allclose(T[:3, 3] + np.array(cv.BOX) / 2, at_grasp, atol=1e-9)
     sim.move_linear(cv.ROBOT, tool_down(pick + np.array([0, 0, 0.1])), speed=0.25)
     # lifted with the gripper, no longer carried along by the belt
-    assert np.allclose(sim.part_positions()["box_1"], at_grasp + [0, 0, 0.1], atol=1e-6)
+    assert np.allclose(sim.part_positions()["box_1"], at_grasp + np.array([0, 0, 0.1]), atol=1e-6)
     assert sim.summary()["collisions"] == 0
