@@ -112,7 +112,9 @@ class FrameRunner:
         c0 = clock()
         check = self.check_collisions
         first = len(self.timeline)  # frame j of this batch becomes timeline frame first + j
-        logic = self._logic  # the cell's devices (None: it has none)
+        logic = self._logic  # the cell's devices (None: none that act on frames)
+        if logic is not None and not (logic.movers or logic.sensors):
+            logic = None  # signals only: nothing to evaluate on a frame
         if self.mode == "playback" and not carried and not check and logic is None:
             walls = np.full(k, clock())
             d.qpos[:] = Q[-1]
