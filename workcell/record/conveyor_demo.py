@@ -95,6 +95,15 @@ def demo(
             f"{robot}: moving {f['moving'] * 100:.1f} %, waiting {f['waiting'] * 100:.1f} %, "
             f"idle {f['idle'] * 100:.1f} % of the time"
         )
+    if physics:
+        worst = max(t.tool_max for t in result.tracking.values())
+        moved = max((p.distance for p in result.parts.values()), default=0.0)
+        resting = sum(p.resting for p in result.parts.values())
+        print(
+            f"physics (mj_step, belts through surfacevel): tool within {worst * 1e3:.3g} mm of "
+            f"the plan, {resting} of {len(result.parts)} boxes resting, within "
+            f"{moved * 1e3:.3g} mm of the kinematic result"
+        )
     print(f"{sim.frames} frames at dt = {dt:g} s; {out['collisions']} collision(s); "
           f"total {time.perf_counter() - t0:.2f} s")  # fmt: skip
     for key, what in (("png", "picture"), ("rrd", "recording"), ("mjcf", "cell")):
