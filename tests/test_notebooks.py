@@ -26,7 +26,15 @@ from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = ROOT / "notebooks"
-NAMES = ("quickstart", "build_your_own_cell", "modeller", "kinematics", "thesis_examples", "study")
+NAMES = (
+    "quickstart",
+    "build_your_own_cell",
+    "modeller",
+    "kinematics",
+    "thesis_examples",
+    "study",
+    "conveyor",
+)
 PICTURES = {
     "quickstart": 4,
     "build_your_own_cell": 2,
@@ -34,6 +42,7 @@ PICTURES = {
     "kinematics": 3,
     "thesis_examples": 3,
     "study": 2,
+    "conveyor": 2,
 }
 FLOAT = r"(-?\d+(?:\.\d*)?(?:e[-+]?\d+)?)"
 
@@ -222,7 +231,23 @@ def check_study(out: str) -> None:
     assert "second run: 0 evaluated, 9 already done" in out
 
 
+def check_conveyor(out: str) -> None:
+    """A beam at 1.3 m from the box's front on a 0.25 m/s belt breaks after 5.2 s (the first
+    frame at or after it, 10 ms apart); the demo's throughput is its boxes over its time."""
+    t = _number(out, "beam broken at t =")
+    assert 1.3 / 0.25 - 1e-9 <= t <= 1.3 / 0.25 + 0.01 + 1e-9
+    assert _vector(out, "'box_1': ") == pytest.approx([1.45, 0.0, 0.55], abs=1e-3)  # at the beam
+    assert _number(out, "boxes stacked:") == 8
+    T = _number(out, "time:")
+    assert _number(out, "boxes per hour:") == pytest.approx(8 * 3600 / T, abs=0.01)
+    shares = [_number(out, f"{k} ") for k in ("ur5e: moving", "waiting", "idle")]
+    assert sum(shares) == pytest.approx(100, abs=0.15)
+    assert "'a' waits for signal 'b_done' = true" in out
+    assert "'b' waits for signal 'a_done' = true" in out
+
+
 CHECKS = {
+    "conveyor": check_conveyor,
     "quickstart": check_quickstart,
     "build_your_own_cell": check_build_your_own_cell,
     "modeller": check_modeller,

@@ -193,6 +193,23 @@ MODULES = [
     "workcell.study.plots",
     "workcell.study.runner",
     "workcell.study.cli",
+    "workcell.cell.devices",
+    "workcell.cell.compile_devices",
+    "workcell.sim.devices",
+    "workcell.sim.signals",
+    "workcell.sim.throughput",
+    "workcell.sim.physics_devices",
+    "workcell.logic",
+    "workcell.logic.scheduler",
+    "workcell.logic.programs",
+    "workcell.program.logiccommands",
+    "workcell.program.grammar_logic",
+    "workcell.program.wcl_programs",
+    "workcell.record.gantt",
+    "workcell.record.devices",
+    "workcell.record.rr_devices",
+    "workcell.record.conveyor_demo",
+    "workcell.examples.conveyor",
 ]
 
 

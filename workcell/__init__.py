@@ -12,6 +12,7 @@ if TYPE_CHECKING:  # the names below are imported on first use (module __getattr
     from workcell.cell import CompiledCell, Workcell, compile_cell, export_cell
     from workcell.errors import (
         CollisionError,
+        DeadlockError,
         GeometryError,
         GraspError,
         JointLimitError,
@@ -23,6 +24,7 @@ if TYPE_CHECKING:  # the names below are imported on first use (module __getattr
         ProtocolError,
         RecordError,
         RenderError,
+        SignalTimeout,
         StudyError,
         UnreachableError,
         WorkcellError,
@@ -40,6 +42,7 @@ _ERRORS = (
     "CollisionError", "GeometryError", "GraspError", "JointLimitError", "KinematicsError",
     "LimitError", "ModelError", "PlanningError", "ProgramError", "ProtocolError",
     "RecordError", "RenderError", "StudyError", "UnreachableError", "WorkcellError",
+    "DeadlockError", "SignalTimeout",
 )  # fmt: skip
 _HOMES = {
     **dict.fromkeys(_ERRORS, "workcell.errors"),
@@ -74,6 +77,7 @@ __version__ = "0.1.0"
 __all__ = [
     "CollisionError",
     "CompiledCell",
+    "DeadlockError",
     "EntityInfo",
     "GeometryError",
     "GraspError",
@@ -89,6 +93,7 @@ __all__ = [
     "RecordError",
     "Relation",
     "RenderError",
+    "SignalTimeout",
     "Simulator",
     "StudyError",
     "Surface",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
 import json
 import signal
@@ -10,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+from workcell import limits
 from workcell.cli_common import add_record_fps, check_outputs, interrupted, run_command
 from workcell.examples import CELL_HELP, CELLS
 
@@ -75,6 +77,7 @@ def _demo_solids(args: argparse.Namespace) -> int:
 
 
 TITLES = {
+    "conveyor": "beyond the thesis: a belt, a light beam and a UR5e stacking boxes",
     "joints": "the thesis's example 1 (ch. 5): one Puma 260 moved in joint space",
     "pick-place": "the thesis's example 2 (ch. 5): pick and place with one Puma 260",
     "handoff": "the thesis's example 3 (ch. 5): two Puma 260s hand a sphere over",
@@ -184,6 +187,14 @@ def _demo(args: argparse.Namespace) -> int:
         from workcell.errors import ProgramError
 
         raise ProgramError(f"--dt must be > 0 s, got {args.dt}")
+    if args.example == "conveyor":
+        from workcell.record.conveyor_demo import demo
+
+        check_outputs(rrd=args.save, png=args.render, folder=args.mjcf)
+        return demo(
+            args.mode, args.dt, render=args.render, as_json=args.json, save=args.save,
+            mjcf=args.mjcf, physics=args.physics, record_fps=args.record_fps or None,
+        )  # fmt: skip
     if args.example == "obstacle":
         from workcell.record.obstacle_demo import demo
 
@@ -260,8 +271,9 @@ def _parser() -> argparse.ArgumentParser:
         default=[],
         metavar="NAME=VALUE",
         help="raise (or lower) a work limit of workcell.limits for this run, e.g. "
-        "--limit max_facets=2e6 (limits: max_facets, max_frames_per_command, max_frames, "
-        "max_spill_bytes, max_sim_time, max_file_bytes, max_coordinate, max_program_steps)",
+        "--limit max_facets=2e6 (limits: "
+        + ", ".join(f.name for f in dataclasses.fields(limits.Limits))
+        + ")",
     )
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run a built-in example")
@@ -270,7 +282,8 @@ def _parser() -> argparse.ArgumentParser:
         choices=["solids", *CELLS],
         help="solids: the thesis's example solids (ch. 2-3); joints, pick-place, handoff: "
         "its three example workcells (ch. 5); obstacle: a wall between two stages, the "
-        "direct program against pick/place",
+        "direct program against pick/place; conveyor: a belt, a light beam and a UR5e "
+        "stacking boxes, two programs run together (throughput and utilisation)",
     )
     demo.add_argument(
         "--mode",

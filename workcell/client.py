@@ -64,6 +64,8 @@ _KEEPS_CELL = frozenset(
         "robots", "frames", "sim_time", "events", "hello", "part_pose", "gripper_pose",
         "speed", "trajectory", "wall_time", "concurrently_begin", "concurrently_end",
         "export_program", "run_robot_program",
+        "set_signal", "wait_signal", "signal", "signals", "distance", "throughput", "gantt",
+        "programs", "run_programs",
     }
 )  # fmt: skip
 
@@ -395,6 +397,54 @@ class Client:
             raise
         self.call("concurrently_end", commit=True)
 
+    def signal(self, name: str) -> bool | int | float:
+        """A signal's value now."""
+        return self.call("signal", name=name)[name]
+
+    def signals(self) -> dict[str, bool | int | float]:
+        """Every signal's value now, by name."""
+        return self.call("signals")
+
+    def set_signal(self, name: str, value: bool | int | float) -> None:
+        """Give a signal its value now."""
+        self.call("set_signal", name=name, value=_plain_value(value))
+
+    def wait_signal(
+        self, name: str, value: bool | int | float = True, *, timeout: float | None = None
+    ) -> None:
+        """Let simulated time pass until the signal has ``value``; at most ``timeout`` s
+        (SignalTimeout then)."""
+        self.call("wait_signal", name=name, value=_plain_value(value), timeout=timeout)
+
+    def distance(self, name: str) -> float:
+        """A proximity sensor's distance (m) to the first surface on its ray (inf: none)."""
+        d = self.call("distance", name=name)
+        return math.inf if d is None else float(d)
+
+    def run_programs(
+        self, programs: dict[str, Any], *, until: float | None = None
+    ) -> dict[str, dict[str, Any]]:
+        """Run programs together on the server: ``programs`` maps names (a robot's, or a
+        controller's) to ``.wcl`` files in the server's folder (Python functions do not
+        travel: run them in-process, or send their commands one by one)."""
+        if not isinstance(programs, dict):
+            raise WorkcellError("run_programs: programs must be a dict of names to .wcl files")
+        for name, body in programs.items():
+            if not isinstance(body, (str, os.PathLike)):
+                from workcell.errors import ProgramError
+
+                raise ProgramError(
+                    f"run_programs over the network: program '{name}' must be a .wcl file on "
+                    f"the server, got {type(body).__name__} (Python functions run in-process)"
+                )
+        files = {k: os.fspath(v) for k, v in programs.items()}
+        return self.call("run_programs", programs=files, until=until)
+
+    def throughput(self) -> dict[str, Any]:
+        """The cell's results: parts per hour at each sink, signals' rises per hour, each
+        robot's moving / waiting / idle fractions."""
+        return self.call("throughput")
+
     def part_positions(self) -> dict[str, list[float]]:
         """World position (m) of each movable part's centroid."""
         return self.call("part_positions")
@@ -454,6 +504,11 @@ def _local_token(host: str, port: int) -> str | None:
     if env:
         return env
     return read_token_file(port) if is_loopback(host) else None
+
+
+def _plain_value(v: Any) -> Any:
+    """A signal value as plain JSON (numpy scalars become Python ones)."""
+    return v.item() if isinstance(v, np.generic) else v
 
 
 def _list(v: Any) -> Any:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 __all__ = [
     "CollisionError",
+    "DeadlockError",
     "DegenerateError",
     "GeometryError",
     "GraspError",
@@ -21,6 +22,7 @@ __all__ = [
     "ProtocolError",
     "RecordError",
     "RenderError",
+    "SignalTimeout",
     "StudyError",
     "UnreachableError",
     "WorkcellError",
@@ -98,3 +100,13 @@ class StudyError(WorkcellError):
 class LimitError(WorkcellError):
     """Work over a limit of :mod:`workcell.limits` was refused before it started (the
     message names the limit and how to raise it)."""
+
+
+class SignalTimeout(ProgramError):  # noqa: N818 - the contract's name (DESIGN.md)
+    """``wait_signal`` ran out of time: the signal did not take the value waited for within
+    the timeout (the message names the signal, the value waited for and the value it has)."""
+
+
+class DeadlockError(ProgramError):
+    """Programs run together (``run_programs``) all wait for signals that nothing can
+    change any more (the message names each program and what it waits for)."""

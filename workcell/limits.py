@@ -18,6 +18,8 @@ limit                       default        what it bounds
 ``max_file_bytes``          256 MiB        a model, cell or script file read
 ``max_coordinate``          1e6 m          any coordinate, length or translation given, and
                                            any entry of a transform's 3x3 part
+``max_part_copies``         100            copies a part source without a ``count`` makes
+                                           (each is a body of the compiled model)
 ``max_path_samples``        100,000        poses one Cartesian command solves IK for (a line
                                            or arc at a tiny step; ~40 us and ~1.3 KB each)
 ``max_candidates``          1,000,000      candidates of one study (a grid or a sample)
@@ -90,6 +92,7 @@ class Limits:
     max_sim_time: float = _limit(1e7, "s", "the simulated clock")
     max_file_bytes: int = _limit(256 << 20, "bytes", "a file read (model, cell, script)")
     max_coordinate: float = _limit(1e6, "m", "a coordinate, length or transform entry")
+    max_part_copies: int = _limit(100, "copies", "copies made by a source without a count")
     max_path_samples: int = _limit(100_000, "samples", "IK samples of one Cartesian command")
     max_candidates: int = _limit(1_000_000, "candidates", "candidates of one study")
     max_workers: int = _limit(64, "workers", "worker processes one study starts here")

@@ -48,7 +48,8 @@ def test_every_file_argument_is_declared_as_a_file_name():
     for name, cls in COMMANDS.items():
         for f in dataclasses.fields(cls):
             looks_like_file = any(w in f.name for w in ("path", "file", "out", "dir", "folder"))
-            looks_like_file &= f.name != "profile"  # set_profile's motion profile is no file
+            # a motion profile, a sensor's direction and a wait's timeout are no files
+            looks_like_file &= f.name not in ("profile", "direction", "timeout")
             if looks_like_file:
                 assert f.name in found.get(name, []), (name, f.name)
             assert label(f.metadata["convert"]) != "string", (name, f.name)  # no raw text

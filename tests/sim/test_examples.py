@@ -145,7 +145,7 @@ def test_example_cells_load_by_name_for_every_cli_command(tmp_path, capsys):
     from workcell.cli import main
     from workcell.examples import CELLS, example, load_cell
 
-    assert set(CELLS) == {"joints", "pick-place", "handoff", "obstacle"}
+    assert set(CELLS) == {"joints", "pick-place", "handoff", "obstacle", "conveyor"}
     cell = load_cell("handoff")
     assert set(cell.robots) == {ho.GIVER, ho.RECEIVER}
     cell.save(tmp_path / "h.json")
@@ -155,5 +155,7 @@ def test_example_cells_load_by_name_for_every_cli_command(tmp_path, capsys):
     assert [r["name"] for r in info["robots"]] == [pp.ROBOT]
     assert main(["export", "handoff", "--out", str(tmp_path / "x")]) == 0
     assert (tmp_path / "x" / "thesis_handoff.xml").exists()
-    with pytest.raises(ProgramError, match="examples: joints, pick-place, handoff, obstacle"):
+    with pytest.raises(
+        ProgramError, match="examples: joints, pick-place, handoff, obstacle, conveyor"
+    ):
         example("welding")

@@ -2,8 +2,9 @@
 the model through :meth:`Model.to_dict`; static and movable parts (entity, pose, colour,
 density); robots as their library name, their robot file (path relative to the cell
 file, sha256, import options) or their chain inline (:mod:`workcell.cell.robot_json`),
-plus gripper parameters, base pose and initial joint values; cameras. Lengths m, angles
-rad, densities kg/m^3, fields of view deg.
+plus gripper parameters, base pose and initial joint values; cameras; the logic devices
+(signals, sensors, conveyors, sources, sinks: :mod:`workcell.cell.devices`). Lengths m,
+angles rad, densities kg/m^3, fields of view deg.
 
 :meth:`Workcell.to_dict <workcell.cell.workcell.Workcell.to_dict>` and
 :meth:`Workcell.from_dict <workcell.cell.workcell.Workcell.from_dict>` call
@@ -17,6 +18,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from workcell.cell.devices import device_sections, devices_to_dict
 from workcell.cell.items import _NAME_RE
 from workcell.cell.robot_json import kinematics_json, robot_from_json, robot_json
 from workcell.errors import ModelError, WorkcellError
@@ -89,6 +91,7 @@ def cell_to_dict(
             }
             for c in cell.cameras.values()
         ],
+        **devices_to_dict(cell),
     }
 
 
@@ -161,6 +164,7 @@ def cell_from_dict(
             "cameras",
             lambda e: cell.add_camera(e["name"], e["position"], e["target"], e["fovy"]),
         ),
+        *device_sections(cell),
     ]
     for key, add in sections:
         entries = data.get(key, [])

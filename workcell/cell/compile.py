@@ -17,6 +17,9 @@ Contents of the compiled model (all names MJCF-safe, never '/'):
   identity, torquescale 1; the simulator writes the captured relative pose on grasp)
   and a stiff ``solref`` (0.004, 1);
 - camera ``C``: an MJCF camera at the position, turned so its -z axis points to the target;
+- the devices (:mod:`workcell.cell.compile_devices`): each conveyor's belt, frame and end
+  stop as geoms of the world body, and each source's copies ``<part>_1`` ... as bodies
+  like their pattern's, parked far above the cell (welds to every gripper included);
 - physics settings, which the kinematic simulator ignores: the robots' position actuators
   (one per arm joint and finger slide, named as the joint: ``puma_1.j1``,
   ``puma_1.gripper.left_slide``), ``gravcomp`` on robot bodies and joint armature (see
@@ -51,6 +54,12 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from workcell.cell.compile_devices import (
+    add_conveyor_geoms,
+    belt_geom,
+    park_copies,
+    parking_position,
+)
 from workcell.cell.workcell import Workcell
 from workcell.checks import is_finite_number
 from workcell.decompose import DEFAULT_CONCAVITY
@@ -84,6 +93,7 @@ __all__ = [
     "INITIAL_KEY",
     "WELD_DATA",
     "CompiledCell",
+    "add_device_bodies",
     "compile_cell",
     "export_cell",
     "subtree_bodies",
@@ -105,7 +115,10 @@ class CompiledCell:
     (arm joints in DH order), ``finger_joints`` (left, right slides; robots with a
     gripper), ``tool_sites``, ``gripper_bodies``, ``part_bodies`` (movable parts),
     ``free_joints`` (movable parts), ``welds`` ((robot, part) -> equality name),
-    ``cameras``, ``actuators`` (the robot's position actuators: arm joints in DH order,
+    ``cameras``, ``patterns`` (a source's copy -> the part it copies; copies are in
+    ``part_bodies`` too), ``parking`` (movable part or copy -> its parking place, m:
+    :mod:`workcell.cell.compile_devices`), ``conveyors`` (conveyor -> its belt geom),
+    ``actuators`` (the robot's position actuators: arm joints in DH order,
     then the fingers), ``holds`` (joint name -> the joint value its actuator holds at
     ctrl 0: the initial value), ``initial_ctrl`` (joint name -> the ``initial`` keyframe's
     ctrl: 0). ``assets`` holds the mesh files (name -> STL bytes).
@@ -122,6 +135,9 @@ class CompiledCell:
     free_joints: dict[str, str] = field(default_factory=dict)
     welds: dict[tuple[str, str], str] = field(default_factory=dict)
     cameras: dict[str, str] = field(default_factory=dict)
+    patterns: dict[str, str] = field(default_factory=dict)
+    parking: dict[str, np.ndarray] = field(default_factory=dict)
+    conveyors: dict[str, str] = field(default_factory=dict)
     actuators: dict[str, tuple[str, ...]] = field(default_factory=dict)
     initial_ctrl: dict[str, float] = field(default_factory=dict)
     holds: dict[str, float] = field(default_factory=dict)
@@ -138,8 +154,9 @@ def _add_part_geoms(
     density: float,
     reg: MeshAssets,
     concavity: float,
-) -> None:
-    """Mesh assets of a part, its visual (mass-carrying) geoms and collision geoms in ``parent``.
+) -> tuple[list[tuple[str, str]], list[str]]:
+    """Mesh assets of a part, its visual (mass-carrying) geoms and collision geoms in
+    ``parent``; returns the (visual geom, mesh) pairs and the collision mesh names.
 
     An object gets one visual mesh per placed block (each a closed solid; overlapping
     blocks would make one concatenated mesh that MuJoCo refuses); its mass is the sum of
@@ -155,16 +172,12 @@ def _add_part_geoms(
     col = collision_pieces(model, entity, concavity)
     cols = meshes if col.convex else collision_meshes(reg, name, col.pieces, False, meshes[0])
     pos, quat = pos_quat_from_pose(pose)
+    pairs = [(geom, mesh) for (_, geom, _), mesh in zip(visuals, meshes, strict=True)]
     add_mesh_geoms(
-        parent,
-        [(geom, mesh) for (_, geom, _), mesh in zip(visuals, meshes, strict=True)],
-        cols,
-        collision_prefix=name,
-        pos=pos,
-        quat=quat,
-        density=density,
+        parent, pairs, cols, collision_prefix=name, pos=pos, quat=quat, density=density,
         rgba=list(colour),
-    )
+    )  # fmt: skip
+    return pairs, cols
 
 
 def _set_initial_q(child: mujoco.MjSpec, robot, q: np.ndarray) -> None:  # noqa: ANN001
@@ -220,13 +233,17 @@ def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
         _add_part_geoms(
             spec.worldbody, m, p.name, p.entity, p.colour, p.pose, 1000.0, reg, concavity
         )
+    meshes = {}
     for p in cell.movable_parts.values():
         body = spec.worldbody.add_body(name=p.name)
         body.pos, body.quat = pos_quat_from_pose(p.pose)
         body.add_freejoint(name=f"{p.name}.free")
-        _add_part_geoms(body, m, p.name, p.entity, p.colour, np.eye(4), p.density, reg, concavity)
+        meshes[p.name] = _add_part_geoms(
+            body, m, p.name, p.entity, p.colour, np.eye(4), p.density, reg, concavity
+        )
         out.part_bodies[p.name] = p.name
         out.free_joints[p.name] = f"{p.name}.free"
+    add_device_bodies(spec, cell, out, meshes)
     for r in cell.robots.values():
         prefix = f"{r.name}."
         child = robot_spec(r.robot, prefix="")
@@ -282,6 +299,38 @@ def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
     return out
 
 
+def add_device_bodies(
+    spec: mujoco.MjSpec,
+    cell: Workcell,
+    out: CompiledCell,
+    meshes: dict[str, tuple[list[tuple[str, str]], list[str]]],
+) -> None:
+    """The sources' copies (bodies sharing their patterns' ``meshes``: part -> (visual
+    geom/mesh pairs, collision meshes)), the parking places and the conveyors
+    (:mod:`workcell.cell.compile_devices`)."""
+    for src in cell.sources.values():
+        p = cell.movable_parts[src.part]
+        pos, quat = pos_quat_from_pose(p.pose)
+        visuals, cols = meshes[src.part]
+        for copy in src.copies:  # compiled at the pattern's pose, parked after compiling
+            body = spec.worldbody.add_body(name=copy, pos=pos, quat=quat)
+            body.add_freejoint(name=f"{copy}.free")
+            add_mesh_geoms(
+                body, [(g.replace(p.name, copy, 1), mesh) for g, mesh in visuals], cols,
+                collision_prefix=copy, pos=[0.0, 0.0, 0.0], quat=[1.0, 0.0, 0.0, 0.0],
+                density=p.density, rgba=list(p.colour),
+            )  # fmt: skip
+            out.part_bodies[copy] = copy
+            out.free_joints[copy] = f"{copy}.free"
+            out.patterns[copy] = src.part
+    out.parking = {name: parking_position(k) for k, name in enumerate(out.part_bodies)}
+    signals = {s.name: s.initial for s in cell.signals.values()}
+    for c in cell.conveyors.values():
+        running = c.run_signal is None or signals.get(c.run_signal) is True
+        add_conveyor_geoms(spec.worldbody, c, running)
+        out.conveyors[c.name] = belt_geom(c.name)
+
+
 def compile_cell(
     cell: Workcell,
     *,
@@ -300,6 +349,7 @@ def compile_cell(
         out.model = m = out.spec.compile()
     except ValueError as exc:
         raise GeometryError(f"cell '{cell.name}' does not compile in MuJoCo: {exc}") from exc
+    park_copies(out.spec, m, list(out.patterns), out.free_joints, out.parking)
     if m.nkey:  # the key was written in joint-name order: put it in actuator order
         ctrl = [out.initial_ctrl[m.joint(j).name] for j in m.actuator_trnid[:, 0]]
         out.spec.key(INITIAL_KEY).ctrl = ctrl

@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike
 
 from workcell import limits
 from workcell.cell.cell_json import FORMAT, VERSION, cell_from_dict, cell_to_dict
+from workcell.cell.devices import DeviceItems
 from workcell.cell.items import (
     BUILTIN_ROBOTS,
     GRIPPER_PARAMETERS,
@@ -89,8 +90,10 @@ def _vec3(value: object, what: str) -> Array:
     return v
 
 
-class Workcell:
-    """A workcell: parts, robots and cameras by unique name (see the module doc)."""
+class Workcell(DeviceItems):
+    """A workcell: parts, robots and cameras by unique name (see the module doc), and
+    logic devices: signals, sensors, conveyors, part sources and sinks
+    (:mod:`workcell.cell.devices`)."""
 
     def __init__(self, name: str = "workcell", model: Model | None = None) -> None:
         self.name = check_cell_name(name, "cell")
@@ -99,6 +102,7 @@ class Workcell:
         self._movable: dict[str, MovablePart] = {}
         self._robots: dict[str, RobotPlacement] = {}
         self._cameras: dict[str, Camera] = {}
+        self._init_devices()
 
     # ------------------------------------------------------------------ views
     @property
@@ -122,11 +126,17 @@ class Workcell:
         return MappingProxyType(self._cameras)
 
     def names(self) -> list[str]:
-        """Every name in the cell (static, movable, robots, cameras)."""
-        return [*self._static, *self._movable, *self._robots, *self._cameras]
+        """Every name in the cell (static, movable, robots, cameras, then the devices:
+        signals, sensors, conveyors, sources, sinks)."""
+        return [*self._static, *self._movable, *self._robots, *self._cameras, *self._device_names()]
 
     def kind_of(self, name: str) -> str:
-        """``"static"``, ``"movable"``, ``"robot"`` or ``"camera"``; ModelError when unknown."""
+        """``"static"``, ``"movable"``, ``"robot"``, ``"camera"`` or a device kind
+        (``"signal"``, ``"sensor"``, ``"conveyor"``, ``"source"``, ``"sink"``); ModelError
+        when unknown."""
+        device = self._device_kind(name)
+        if device is not None:
+            return device
         for kind, d in (
             ("static", self._static),
             ("movable", self._movable),
@@ -145,7 +155,12 @@ class Workcell:
         if name in self.names():
             raise ModelError(
                 f"{kind} name '{name}' is taken (by a {self.kind_of(name)}); names are unique "
-                f"across parts, robots and cameras; taken: {self._known()}"
+                f"across parts, robots, cameras and devices; taken: {self._known()}"
+            )
+        source = self._reserved().get(name)
+        if source is not None:
+            raise ModelError(
+                f"{kind} name '{name}' is reserved for a copy made by source '{source}'"
             )
         return name
 
@@ -327,8 +342,15 @@ class Workcell:
         return cam
 
     def remove(self, name: str) -> None:
-        """Remove the part, robot or camera ``name`` (the model's entities stay)."""
+        """Remove the part, robot, camera or device ``name`` (the model's entities stay);
+        refused for a part a source copies and a signal a device uses."""
         kind = self.kind_of(name)
+        if self._device_kind(name) is not None:
+            self._remove_device(name, kind)
+            return
+        users = [s.name for s in self._sources.values() if s.part == name]
+        if users:
+            raise ModelError(f"cannot remove part '{name}': source '{users[0]}' copies it")
         {
             "static": self._static,
             "movable": self._movable,
@@ -409,7 +431,9 @@ class Workcell:
     __hash__ = None  # type: ignore[assignment]
 
     def __repr__(self) -> str:
+        devices = len(self._device_names())
+        more = f", {devices} devices" if devices else ""
         return (
             f"Workcell({self.name!r}: {len(self._static)} static, {len(self._movable)} movable, "
-            f"{len(self._robots)} robots, {len(self._cameras)} cameras)"
+            f"{len(self._robots)} robots, {len(self._cameras)} cameras{more})"
         )

@@ -1,5 +1,6 @@
 """Example builders: the thesis's solids and its three workcells (ch. 5), and beyond it
-the obstacle cell (a wall between two stages, for collision-free planning).
+the obstacle cell (a wall between two stages, for collision-free planning) and the
+conveyor cell (a belt, a light beam, a UR5e stacking boxes: programs that run together).
 
 Each workcell example has ``build()`` (the cell), ``program(sim)`` (the thesis's program)
 and ``run(mode, dt, **options)`` (both, through :func:`run_program`).
@@ -27,6 +28,7 @@ CELLS = {
     "pick-place": "workcell.examples.thesis_pick_place",
     "handoff": "workcell.examples.thesis_handoff",
     "obstacle": "workcell.examples.obstacle",  # beyond the thesis: a wall between two stages
+    "conveyor": "workcell.examples.conveyor",  # beyond: a belt, a beam, a UR5e, two programs
 }
 
 CELL_HELP = f"a cell saved by Workcell.save (.json), or an example cell: {', '.join(CELLS)}"

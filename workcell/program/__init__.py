@@ -11,7 +11,14 @@
   :mod:`workcell.client`).
 """
 
-from workcell.program import cellcommands, commands, progcommands, simcommands, solidcommands
+from workcell.program import (
+    cellcommands,
+    commands,
+    progcommands,
+    simcommands,
+    solidcommands,
+    wcl_programs,
+)
 from workcell.program.base import COMMANDS, Command, from_wire
 from workcell.program.session import Session
 from workcell.program.targets import Target
@@ -27,4 +34,5 @@ __all__ = [
     "progcommands",
     "simcommands",
     "solidcommands",
+    "wcl_programs",
 ]

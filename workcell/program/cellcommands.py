@@ -103,8 +103,8 @@ class SaveCell(Command, wire="save_cell"):
 
 @dataclass(frozen=True)
 class ExampleCell(Command, wire="example_cell"):
-    """Replace the cell by an example cell: the thesis's joints, pick-place, handoff, or
-    obstacle (a wall between two stages)."""
+    """Replace the cell by an example cell: the thesis's joints, pick-place, handoff,
+    obstacle (a wall between two stages) or conveyor (a belt, a light beam, a UR5e)."""
 
     name: str = arg(a.choice(*EXAMPLES))
 

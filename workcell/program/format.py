@@ -63,6 +63,11 @@ def format_result(command: Command, result: Any, session: Session | None = None)
     """The text the shell prints after ``command`` returned ``result`` ("" for nothing)."""
     if result is None:
         return ""
+    from workcell.program.logiccommands import format_logic
+
+    logic = format_logic(command, result)
+    if logic is not None:
+        return logic
     given = (getattr(command, "name", None), getattr(command, "new_name", None))
     if isinstance(result, str) and (result in given or result == getattr(command, "relation", 0)):
         return ""  # a created or renamed thing's own name: nothing new to say

@@ -52,8 +52,9 @@ CELL = Keys(
             Choice("name", {k: k for k in cellc.EXAMPLES}),
             Leaf(
                 lambda v: cellc.ExampleCell(v["name"]),
-                "cell example joints|pick-place|handoff|obstacle",
-                "load an example cell: the thesis's three (ch. 5), or a wall between two stages",
+                "cell example joints|pick-place|handoff|obstacle|conveyor",
+                "load an example cell: the thesis's three (ch. 5), a wall between two stages, or "
+                "a belt with a light beam and a UR5e (its programs: workcell.examples.conveyor)",
                 "cell example joints",
             ),
         ),

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from workcell.program import grammar_logic
 from workcell.program import progcommands as progc
 from workcell.program import simcommands as simc
 from workcell.program.grammar_cell import ADD, CELL
@@ -93,7 +94,7 @@ def _query(build: Any, syntax: str, summary: str) -> Leaf:
 
 BRANCHES: dict[str, Node] = {
     "cell": CELL,
-    "add": ADD,
+    "add": Keys({**ADD.branches, **grammar_logic.ADD_DEVICES}),
     "simulate": _SIMULATE,
     "mode": Seq(
         Choice("mode", _MODES),
@@ -171,6 +172,7 @@ BRANCHES: dict[str, Node] = {
     "positions": _query(
         lambda v: simc.PartPositions(), "positions", "movable parts' centroids (m)"
     ),
+    **grammar_logic.BRANCHES,
 }
 
 # the Simulator's method names, accepted as keywords too (not offered in completion)
@@ -191,4 +193,5 @@ ALIASES: dict[str, Node] = {
     "set_planning": BRANCHES["planning"],
     "tool_pose": BRANCHES["pose"],
     "sim_time": BRANCHES["time"].empty,  # type: ignore[attr-defined]
+    **grammar_logic.ALIASES,
 }

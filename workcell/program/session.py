@@ -62,6 +62,7 @@ class Session:
         self.reply_bytes: int | None = None  # a server's message bound (check_reply)
         self.lock = threading.RLock()
         self._block: tuple[Simulator, Any] | None = None
+        self.programs: dict[str, str] = {}  # run_programs' programs: name -> .wcl file
 
     @property
     def block(self) -> tuple[Simulator, Any] | None:
@@ -99,7 +100,7 @@ class Session:
         if self.cell is None:
             raise ProgramError(
                 "no cell yet: start one with 'cell new NAME', 'cell load FILE' or "
-                "'cell example joints|pick-place|handoff|obstacle'"
+                "'cell example joints|pick-place|handoff|obstacle|conveyor'"
             )
         return self.cell
 
@@ -145,7 +146,8 @@ class Session:
         """Known names of ``kind`` for completion and checks.
 
         Kinds: a datamodel level, ``entity`` (every level), ``owner`` (blocks, objects,
-        scenes), ``robot``, ``part`` (static and movable), ``movable``, ``cellitem``.
+        scenes), ``robot``, ``part`` (static and movable), ``movable``, ``cellitem``,
+        ``signal`` (declared and sensors' signals), ``sensor``.
         """
         m = self.model
         if kind in ("surface", "block", "object", "scene"):
@@ -159,12 +161,19 @@ class Session:
             return []
         if kind == "robot":
             return list(self.sim.robots) if self.sim is not None else list(cell.robots)
+        movable = list(cell.movable_parts)
+        if self.sim is not None:  # and the copies sources make (workcell.cell.devices)
+            movable += [p for p in self.sim.compiled.part_bodies if p not in cell.movable_parts]
         if kind == "part":
-            return [*cell.static_parts, *cell.movable_parts]
+            return [*cell.static_parts, *movable]
         if kind == "movable":
-            return list(cell.movable_parts)
+            return movable
         if kind == "cellitem":
             return cell.names()
+        if kind == "signal":
+            return [*cell.signals, *cell.sensors]
+        if kind == "sensor":
+            return list(cell.sensors)
         return []
 
     def relation_names(self, owner: str | tuple[str, str]) -> list[str]:

@@ -12,11 +12,29 @@ ProgramError saying so.
 They are defined by idea: run control in :mod:`~workcell.program.runcommands`, moves and
 motion settings in :mod:`~workcell.program.motioncommands`, grippers and task-level
 commands in :mod:`~workcell.program.taskcommands`, read-backs in
-:mod:`~workcell.program.readcommands`; this module gathers them.
+:mod:`~workcell.program.readcommands`, devices, signals, programs that run together and
+results in :mod:`~workcell.program.logiccommands`; this module gathers them.
 """
 
 from __future__ import annotations
 
+from workcell.program.logiccommands import (
+    AddConveyor,
+    AddSensor,
+    AddSignal,
+    AddSink,
+    AddSource,
+    Distance,
+    Gantt,
+    Program,
+    Programs,
+    RunPrograms,
+    SetSignal,
+    Signal,
+    Signals,
+    Throughput,
+    WaitSignal,
+)
 from workcell.program.motioncommands import (
     MoveCircular,
     MoveEndEffector,
@@ -67,13 +85,20 @@ from workcell.program.taskcommands import (
 
 __all__ = [
     "MODES",
+    "AddConveyor",
+    "AddSensor",
+    "AddSignal",
+    "AddSink",
+    "AddSource",
     "Clearance",
     "CloseGripper",
     "ConcurrentlyBegin",
     "ConcurrentlyEnd",
     "CycleTime",
+    "Distance",
     "Events",
     "Frames",
+    "Gantt",
     "GripperPose",
     "Handover",
     "Held",
@@ -90,19 +115,27 @@ __all__ = [
     "Pick",
     "Place",
     "Play",
+    "Program",
+    "Programs",
     "Robots",
+    "RunPrograms",
     "SetMode",
     "SetOverride",
     "SetPlanning",
     "SetProfile",
+    "SetSignal",
     "SetSpeed",
+    "Signal",
+    "Signals",
     "SimTime",
     "Simulate",
     "Speed",
     "StopSimulation",
     "Summary",
+    "Throughput",
     "ToolPose",
     "Trajectory",
     "Wait",
+    "WaitSignal",
     "WallTime",
 ]

@@ -133,10 +133,10 @@ def part_pose(session: Session, part: str) -> np.ndarray:
     cell = session.require_cell()
     if part in cell.static_parts:
         return np.array(cell.static_parts[part].pose)
-    if part not in cell.movable_parts:
+    sim = session.sim
+    if part not in cell.movable_parts and (sim is None or part not in sim.compiled.part_bodies):
         known = ", ".join([*cell.static_parts, *cell.movable_parts]) or "none"
         raise ProgramError(f"no part '{part}' in cell '{cell.name}'; parts: {known}")
-    sim = session.sim
     if sim is None:
         return np.array(cell.movable_parts[part].pose)
     b = sim.model.body(sim.compiled.part_bodies[part]).id
@@ -150,7 +150,7 @@ def part_anchor(session: Session, part: str, anchor: str) -> np.ndarray:
     """World position (m) of a part's ``anchor`` ("centroid" or "top") now."""
     T = part_pose(session, part)
     cell = session.require_cell()
-    p: Any = cell.static_parts.get(part) or cell.movable_parts[part]
+    p: Any = cell.static_parts.get(part) or cell.movable_parts[cell.pattern_of(part)]
     if anchor == "centroid":
         c = cell.model.properties(p.entity).centroid
         return T[:3, :3] @ c + T[:3, 3]

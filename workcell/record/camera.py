@@ -30,6 +30,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell.cell.compile_devices import is_parked
 from workcell.errors import ModelError
 from workcell.meshgeoms import COLLISION_GROUP
 
@@ -62,8 +63,10 @@ def _visible_geoms(model: mujoco.MjModel) -> NDArray[np.intp]:
 
 
 def visual_points(model: mujoco.MjModel, data: mujoco.MjData) -> Array:
-    """World corners (8 per geom) of the bounding boxes of the visible non-plane geoms."""
+    """World corners (8 per geom) of the bounding boxes of the visible non-plane geoms
+    (not of parts parked out of the world, :mod:`workcell.cell.compile_devices`)."""
     idx = _visible_geoms(model)
+    idx = idx[~is_parked(data.geom_xpos[idx, 2])]
     if len(idx) == 0:
         return np.empty((0, 3))
     return _box_points(model, data, idx, 1.0)[:, 1:].reshape(-1, 3)
@@ -99,6 +102,7 @@ def occlusion(model: mujoco.MjModel, data: mujoco.MjData, eye: Array) -> float:
     (module doc); 0: nothing hidden."""
     robot = _robot_bodies(model)
     idx = _visible_geoms(model)
+    idx = idx[~is_parked(data.geom_xpos[idx, 2])]
     parts = idx[~robot[model.geom_bodyid[idx]]]
     if len(parts) == 0 or not robot.any():
         return 0.0

@@ -368,15 +368,19 @@ def render_frame(
 
     ``camera``: a camera of the cell by name, a preset view (``"top"``, ``"front"`` ...:
     :data:`~workcell.record.camera.VIEWS`), or None for :func:`overview_camera`; views
-    are fitted over the whole run (the same view for every frame of a run).
+    are fitted over the whole run (the same view for every frame of a run). Sensors and
+    sinks are drawn over the cell (:func:`workcell.record.devices.device_paths`: a broken
+    beam red).
     """
+    from workcell.record.devices import device_paths
+
     i = _check_frame(sim, frame)
     cam = _camera_for(sim, camera, width, height)
     data = mujoco.MjData(sim.model)
     data.qpos[:] = sim.timeline.frame(i)[2]
     mujoco.mj_forward(sim.model, data)
     with CellRenderer(sim.model, width, height) as r:
-        return r.render(data, cam)
+        return r.render(data, cam, paths=device_paths(sim.cell, sim.events, i))
 
 
 def render_cell(
@@ -402,8 +406,10 @@ def render_cell(
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     cam = named_view(model, camera, width=width, height=height)
+    from workcell.record.devices import device_paths
+
     with CellRenderer(model, width, height, collision=collision) as r:
-        return r.render(data, cam)
+        return r.render(data, cam, paths=device_paths(cell))
 
 
 def _png_bytes(image: NDArray[np.uint8]) -> bytes:

@@ -25,7 +25,11 @@ Layout of the recording (entity paths; names escaped with ``rr.escape_entity_pat
 - ``/gripper/{robot}``: 1 while the robot holds a part (from its ``grasp`` event to its
   ``release`` event), else 0; logged at the changes, the start and the end;
 - ``/events``: every timeline event as a ``TextLog`` (``error``: ERROR, ``collision``:
-  WARN, ``grasp``/``release``: INFO, ``move``/``wait``/``speed``: DEBUG, others: INFO).
+  WARN, ``grasp``/``release``: INFO, ``move``/``wait``/``speed``: DEBUG, others: INFO);
+- a cell with devices or a run of ``run_programs``: ``/world/sensors``, ``/world/sinks``,
+  ``/signals``, ``/programs`` and ``/results`` (the throughput and the Gantt chart), see
+  :mod:`workcell.record.rr_devices`; a body parked out of the world (a source's copy not
+  made yet, a part a sink removed) is shrunk to nothing.
 
 Timelines: ``frame`` (sequence: the frame index), ``sim_time`` (duration, integer ns: the
 simulated clock; frames may share one, e.g. under joint-by-joint mode's thesis clock) and
@@ -69,6 +73,7 @@ from tqdm import tqdm
 from workcell.cli_common import check_recording_path
 from workcell.errors import RecordError
 from workcell.files import atomic_path
+from workcell.record.rr_devices import PROGRAMS, RESULTS, SIGNALS, has_logic, log_devices
 from workcell.record.rr_frames import Frames, log_events
 from workcell.record.rr_rates import Rates, acceleration_entity, speed_entity
 from workcell.record.rr_scene import (
@@ -136,10 +141,14 @@ def _check_fps(fps: object) -> None:
 
 
 # ---------------------------------------------------------------------- public
-def default_blueprint(robots: Sequence[str], *, grippers: bool = True) -> rrb.Blueprint:
+def default_blueprint(
+    robots: Sequence[str], *, grippers: bool = True, logic: bool = False
+) -> rrb.Blueprint:
     """The default layout: the 3D cell (tool paths drawn up to the cursor) beside, per
     robot, tabs of its joint angles, speeds and accelerations, the gripper states (with
-    ``grippers``) and the event log; the time panel on ``sim_time``."""
+    ``grippers``), with ``logic`` tabs of the signals, the programs' activity, the Gantt
+    chart and the throughput (:mod:`workcell.record.rr_devices`), and the event log; the
+    time panel on ``sim_time``."""
     trail = rrb.VisibleTimeRanges(
         timeline="sim_time",
         start=rrb.TimeRangeBoundary.infinite(),
@@ -158,9 +167,16 @@ def default_blueprint(robots: Sequence[str], *, grippers: bool = True) -> rrb.Bl
         )
         for r in robots
     ]
+    cell_logic = rrb.Tabs(
+        rrb.TimeSeriesView(origin=SIGNALS, name="Signals"),
+        rrb.TimeSeriesView(origin=PROGRAMS, name="Programs: moving (2) / waiting (1) / idle (0)"),
+        rrb.Spatial2DView(origin=f"{RESULTS}/gantt", name="Gantt chart"),
+        rrb.TextDocumentView(origin=f"{RESULTS}/throughput", name="Throughput"),
+    )
     side = rrb.Vertical(
         *plots,
         *([rrb.TimeSeriesView(origin=GRIPPERS, name="Gripper closed (1) / open (0)")] * grippers),
+        *([cell_logic] * logic),
         rrb.TextLogView(origin=EVENTS, name="Events"),
     )
     return rrb.Blueprint(
@@ -246,6 +262,8 @@ def log_timeline(
             bar.update(len(rows))
         frames.flush()
     log_events(rec, sim, layout, ev_frame, ev_wall, first, last)
+    if has_logic(sim):
+        log_devices(rec, sim, ev_frame, ev_wall, first, last)
     return RecordStats(int(keep.sum()), len(events), len(layout.moving), time.perf_counter() - c0)
 
 
@@ -308,7 +326,9 @@ def record(
         rec = rr.RecordingStream(application_id, recording_id=recording_id)
         rec.set_log_time_enabled(False)
         try:
-            bp = default_blueprint(sim.robots, grippers=bool(sim.compiled.gripper_bodies))
+            bp = default_blueprint(
+                sim.robots, grippers=bool(sim.compiled.gripper_bodies), logic=has_logic(sim)
+            )
             sinks: list[rr.FileSink | rr.GrpcSink] = [rr.FileSink(tmp)] if tmp is not None else []
             sinks += [rr.GrpcSink(_spawn_viewer(port))] if spawn else []
             sinks += [rr.GrpcSink(connect)] if connect is not None else []

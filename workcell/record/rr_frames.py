@@ -1,8 +1,9 @@
 """A timeline's frames and events as rerun columns, for :mod:`workcell.record.rerun_log`.
 
 :class:`Frames` buffers the kept frames, runs ``mujoco.mj_kinematics`` on each in a
-scratch ``MjData`` and sends them in batches with ``send_columns``: body poses, joint
-values with their speeds and accelerations, tool path segments. :func:`log_events` sends
+scratch ``MjData`` and sends them in batches with ``send_columns``: body poses (a body
+parked out of the world, :mod:`workcell.cell.compile_devices`, is shrunk to nothing at
+the origin), joint values with their speeds and accelerations, tool path segments. :func:`log_events` sends
 the events as text logs and the gripper state series. The entity layout and timelines are
 described in :mod:`workcell.record.rerun_log`'s module doc.
 """
@@ -17,6 +18,7 @@ import pyarrow as pa
 import rerun as rr
 from numpy.typing import NDArray
 
+from workcell.cell.compile_devices import PARKED_ABOVE
 from workcell.record.rr_rates import Rates, acceleration_entity, speed_entity
 from workcell.record.rr_scene import EVENTS, Layout, gripper_entity, index_columns
 from workcell.spatial import wxyz_to_xyzw
@@ -57,6 +59,7 @@ class Frames:
         self.tool_end: dict[str, Array] = {}  # last tool point sent, per robot
         self.robots = list(sim.robots)  # in the order of layout.joints
         self.rates = Rates()  # joint speeds and accelerations, carried across batches
+        self.parked: set[int] = set()  # bodies parked out of the world at some frame
 
     def add(self, rows: Array, index: NDArray[np.int64]) -> None:
         """Append timeline rows ``[sim_time, wall_time, *qpos]`` of frames ``index``,
@@ -92,8 +95,15 @@ class Frames:
         pos = np.ascontiguousarray(self.xpos[:n, bodies].transpose(1, 0, 2), dtype=np.float32)
         quat = wxyz_to_xyzw(self.xquat[:n, bodies].reshape(-1, 4)).reshape(n, -1, 4)
         quat = np.ascontiguousarray(quat.transpose(1, 0, 2), dtype=np.float32)
+        away = pos[:, :, 2] > PARKED_ABOVE  # parked bodies: shrunk to nothing at the origin
+        self.parked |= {i for i in range(len(bodies)) if away[i].any()}
         for i, (_, ent) in enumerate(self.layout.moving):
-            cols = rr.Transform3D.columns(translation=pos[i], quaternion=quat[i])
+            if i in self.parked:
+                pos[i][away[i]] = 0.0
+                scale = np.where(away[i][:, None], 0.0, 1.0).repeat(3, axis=1)
+                cols = rr.Transform3D.columns(translation=pos[i], quaternion=quat[i], scale=scale)
+            else:
+                cols = rr.Transform3D.columns(translation=pos[i], quaternion=quat[i])
             rec.send_columns(ent, indexes=idx, columns=cols)
         for robot, (ent, adr, revolute, _) in zip(self.robots, self.layout.joints, strict=True):
             q = rows[:, 2 + adr]

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from workcell import limits
 from workcell.errors import RenderError
 from workcell.files import atomic_path, check_writable
+from workcell.record.devices import device_paths
 from workcell.record.render import CellRenderer, _camera_for, _frames_qpos, save_png
 
 if TYPE_CHECKING:
@@ -151,7 +152,8 @@ def contact_sheet(
             mujoco.mj_forward(sim.model, data)
             x = gap + (k % cols) * (tile_width + gap)
             y = gap + (k // cols) * (tile_height + cap_h + gap)
-            sheet.paste(PILImage.fromarray(r.render(data, cam)), (x, y))
+            paths = device_paths(sim.cell, sim.events, key.frame)
+            sheet.paste(PILImage.fromarray(r.render(data, cam, paths=paths)), (x, y))
             line1 = _fit(draw, f"{k}.  t = {key.t:.2f} s   {key.title}", font, tile_width - 6)
             line2 = _fit(draw, key.detail, font, tile_width - 6)
             draw.text((x + 3, y + tile_height + 3), line1, fill=(20, 20, 20), font=font)
@@ -239,5 +241,5 @@ def rendered_frames(
             if i != last:
                 data.qpos[:] = next(qs)
                 mujoco.mj_forward(sim.model, data)
-                img, last = r.render(data, cam), i
+                img, last = r.render(data, cam, paths=device_paths(sim.cell, sim.events, i)), i
             yield i, img

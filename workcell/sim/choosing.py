@@ -56,6 +56,12 @@ class ChoiceHelpers:
         if not isinstance(part, str) or part not in self._part_body:
             known = ", ".join(self._part_body) or "none"
             raise ProgramError(f"{command}: no movable part {part!r}; movable parts: {known}")
+        if part not in self.part_positions():
+            here = ", ".join(self.part_positions()) or "none"
+            raise ProgramError(
+                f"{command}: part '{part}' is not in the cell now (a source has not made it "
+                f"yet, or a sink removed it); parts in the cell: {here}"
+            )
 
     def _grasps(self, name: str, part: str, pose: Array, command: str) -> list[GraspPose]:
         gripper = self.cell.robots[name].robot.gripper

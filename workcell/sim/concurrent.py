@@ -52,10 +52,29 @@ class PlannedMove:
 
 @dataclass
 class _Block:
+    """Motions planned but not run yet: a ``concurrently()`` block (``run_programs`` keeps
+    one too, :mod:`workcell.logic.scheduler`, whose ``refuse``, ``clock`` and ``add`` go
+    their own way)."""
+
     start: float
     base: Array  # qpos when the block started
     clocks: dict[str, float] = field(default_factory=dict)
     moves: list[PlannedMove] = field(default_factory=list)
+
+    def refuse(self, sim: Simulator, command: str) -> None:
+        """A command other than a motion was given inside the block."""
+        raise ProgramError(
+            f"{command} cannot run inside concurrently(): only motion commands can; "
+            "end the block first"
+        )
+
+    def clock(self, sim: Simulator, robot: str) -> float:
+        """When the robot's next command starts (s)."""
+        return self.clocks.get(robot, self.start)
+
+    def add(self, sim: Simulator, move: PlannedMove) -> None:
+        """Keep a planned move."""
+        self.moves.append(move)
 
 
 class ConcurrentCommands:
@@ -87,16 +106,13 @@ class ConcurrentCommands:
     # ------------------------------------------------------------------ internals
     def _not_in_block(self: Simulator, command: str) -> None:
         if self._block is not None:
-            raise ProgramError(
-                f"{command} cannot run inside concurrently(): only motion commands can; "
-                "end the block first"
-            )
+            self._block.refuse(self, command)
 
     def _start_time(self: Simulator, robot: str) -> float:
         """When the robot's next command starts (s): its block clock, or the sim clock."""
         if self._block is None:
             return self.sim_time
-        return self._block.clocks.get(robot, self._block.start)
+        return self._block.clock(self, robot)
 
     def _defer(
         self: Simulator,
@@ -112,7 +128,7 @@ class ConcurrentCommands:
             return
         self._carried(robot)  # refuse now if the robot may not move
         Q = rows(0, len(times)) if callable(rows) else np.asarray(rows)
-        self._block.moves.append(PlannedMove(robot, times, Q, command, detail, record))
+        self._block.add(self, PlannedMove(robot, times, Q, command, detail, record))
         self._block.clocks[robot] = float(times[-1])
         self.data.qpos[self._qadr[robot]] = Q[-1]
         mujoco.mj_kinematics(self.model, self.data)

@@ -75,8 +75,9 @@ def command_record(
 
 def cycle_report(events: Iterable[Event], total: float) -> dict[str, Any]:
     """``{"total_s", "commands"}``: the records on ``events``, in order of their start
-    (without their ``program``)."""
-    recs = [e.data for e in events if e.data is not None]
+    (without their ``program``; events whose data is no command record, e.g. a sensor's
+    ``signal`` event, are not)."""
+    recs = [e.data for e in events if e.data is not None and "command" in e.data]
     order = sorted(range(len(recs)), key=lambda i: (recs[i]["t_start"], i))
     out = [{k: v for k, v in recs[i].items() if k != "program"} for i in order]
     return {"total_s": float(total), "commands": out}

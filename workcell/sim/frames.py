@@ -15,7 +15,13 @@ undone). :meth:`Simulator.clearance <workcell.sim.simulator.Simulator.clearance>
 the minimum distance between two named things.
 
 Undo (:meth:`FrameRunner._transaction`): an exception while frames are applied restores
-joints, parts, grasps, clocks, speeds and timeline as they were before the command.
+joints, parts, grasps, clocks, speeds, timeline and the devices' state
+(:meth:`~workcell.sim.devices.CellLogic.rebuild`) as they were before the command; inside
+``run_programs``, a command during which other programs ran (:mod:`workcell.logic`) is not
+undone: what the others did stays, and so does what it did before it failed.
+
+Devices (:mod:`workcell.sim.devices`): in a cell with belts, sensors, sources or sinks,
+every frame is computed (playback mode too) and the devices are evaluated on it.
 """
 
 from __future__ import annotations
@@ -87,23 +93,29 @@ class FrameRunner:
         Q: Array,
         carried: list[Carried],
         mover: str | None = None,
-    ) -> None:
+    ) -> int:
         """Apply (path, joint-by-joint) or store (playback) frames; advance both clocks.
 
         Carried parts are posed at gripper x relative pose in every frame (their columns
         of Q are overwritten); with collision checks every frame is computed and checked
-        (a collision involving ``mover``, the robot that moves, is charged to it).
+        (a collision involving ``mover``, the robot that moves, is charged to it). With
+        devices (:mod:`workcell.sim.devices`) each frame is computed and the devices
+        evaluated on it; the frames may stop early when a watched signal takes its value.
+        Returns the number of frames made (``len(times)`` unless stopped early).
         """
         k = len(times)
         if k == 0:
-            return
+            return 0
         m, d = self.model, self.data
         clock = time.perf_counter
         w0 = self._wall
         c0 = clock()
         check = self.check_collisions
         first = len(self.timeline)  # frame j of this batch becomes timeline frame first + j
-        if self.mode == "playback" and not carried and not check:
+        logic = self._logic  # the cell's devices (None: none that act on frames)
+        if logic is not None and not (logic.movers or logic.sensors):
+            logic = None  # signals only: nothing to evaluate on a frame
+        if self.mode == "playback" and not carried and not check and logic is None:
             walls = np.full(k, clock())
             d.qpos[:] = Q[-1]
             mujoco.mj_kinematics(m, d)
@@ -117,8 +129,14 @@ class FrameRunner:
             )
             xpos, xquat = d.xpos, d.xquat
             p, q = np.empty(3), np.empty(4)
+            movers = logic is not None and logic.movers
+            if logic is not None:
+                logic.stop = False
             for j in range(k):
-                qpos[:] = Q[j]
+                if movers:  # parts keep the poses the devices gave them
+                    logic.carry_over(qpos, Q[j])
+                else:
+                    qpos[:] = Q[j]
                 kin(m, d)
                 if carried:
                     for g, adr, rp, rq in carried:
@@ -127,15 +145,22 @@ class FrameRunner:
                         qpos[adr + 3 : adr + 7] = q
                         Q[j, adr : adr + 7] = qpos[adr : adr + 7]
                     kin(m, d)
+                if logic is not None:
+                    logic.frame(float(times[j]), first + j)
+                    Q[j] = qpos
                 if check:
                     collide(m, d)
                     if d.ncon or self._touching:
                         pens = self.contacts.penetrations(d)
                         self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
                 walls[j] = clock()
-        self.timeline.extend(times, w0 + (walls - c0), Q)
-        self.sim_time = float(times[-1])
+                if logic is not None and logic.stop:  # a watched signal took its value
+                    k = j + 1
+                    break
+        self.timeline.extend(times[:k], w0 + (walls[:k] - c0), Q[:k])
+        self.sim_time = float(times[k - 1])
         self._wall = w0 + (clock() - c0)
+        return k
 
     def _contact_events(
         self: Simulator,
@@ -179,9 +204,12 @@ class FrameRunner:
             self.data.eq_active.copy(),
             self.model.eq_data.copy(),
         )
+        hold = getattr(self._block, "releases", None)  # programs run together
         try:
             yield
         except BaseException:
+            if hold is not None and getattr(self._block, "releases", None) != hold:
+                raise  # other programs ran meanwhile: what happened stays (logic/scheduler)
             (
                 self.sim_time,
                 self._wall,
@@ -199,4 +227,6 @@ class FrameRunner:
             del self.grasps[n_grasps:]
             self.data.qpos[:] = qpos
             mujoco.mj_kinematics(self.model, self.data)
+            if self._logic is not None:
+                self._logic.rebuild()
             raise

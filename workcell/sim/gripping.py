@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell.cell.compile_devices import is_parked
 from workcell.checks import is_finite_number, quote_angle, quote_length
 from workcell.errors import GraspError, ProgramError
 from workcell.sim.cycle import command_record
@@ -114,7 +115,7 @@ class GripperCommands:
         opening = float(gripper.max_opening)
         boxes = []
         for p in self._part_body:
-            if name in self._holders[p]:
+            if name in self._holders[p] or is_parked(self.data.xpos[self._part_body[p]][2]):
                 continue
             P = self.part_pose(p)
             lo, hi = self._boxes[p]

@@ -38,7 +38,8 @@ recorded frame) of any contact of a robot (a link or a gripper, not with the par
 holds), or of an overlap deeper than ``contact_tolerance`` between other things (a part
 resting on a support touches at a few micrometres): in physics a robot blocked by what it
 hits barely overlaps it, and shows up as a tracking error instead. (Grasps, releases,
-collisions and the plan's other events of a run: :mod:`workcell.sim.physics_events`.)
+collisions and the plan's other events of a run: :mod:`workcell.sim.physics_events`;
+belts, sources, sinks and sensors: :mod:`workcell.sim.physics_devices`.)
 """
 
 from __future__ import annotations
@@ -56,9 +57,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workcell import limits
+from workcell.cell.compile_devices import PARKED_ABOVE
 from workcell.checks import is_finite_number
 from workcell.errors import ProgramError
 from workcell.sim.contacts import DEFAULT_TOLERANCE, ContactMonitor
+from workcell.sim.physics_devices import PhysicsDevices, is_sensor_event
 from workcell.sim.physics_events import PhysicsEvents
 from workcell.sim.physics_result import PhysicsResult, SettledPart, Tracking
 from workcell.sim.physics_support import (
@@ -204,9 +207,12 @@ class _Run(PhysicsEvents):
         own = ("grasp", "release", "collision")  # the physics run makes its own of these
         self.events: list[tuple[float, int, Event]] = []  # a heap: (t, order, event)
         self.order = itertools.count()
+        self.devices = None if sim._logic is None else PhysicsDevices(self)
         for e in sim.timeline.events:
-            if e.kind not in own:
-                self._event(e.t, e.robot, e.kind, e.detail)
+            if e.kind in own or (self.devices is not None and is_sensor_event(e)):
+                continue
+            keep = e.data if e.kind in ("signal", "source", "sink") else None
+            self._event(e.t, e.robot, e.kind, e.detail, keep)
         tl = sim.timeline
         self.out = Timeline(m.nq, memory_limit=tl.memory_limit, spill_dir=tl.spill_dir)
         nr = len(self.robots)
@@ -221,6 +227,9 @@ class _Run(PhysicsEvents):
         """Step from the first frame to the end of settling; return the result."""
         m, d, h, n_end = self.m, self.d, self.h, self.n_end
         bounds = sorted({*range(0, n_end, _BLOCK), n_end, *(s for s, _ in self.todo)})
+        devices = self.devices
+        if devices is not None:
+            bounds = sorted({*bounds, *(s for s in devices.steps if s < n_end)})
         lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
         show = progress if progress is not None else (sys.stderr.isatty() and n_end > 100_000)
         bar = None
@@ -234,6 +243,8 @@ class _Run(PhysicsEvents):
         try:
             for a, b in itertools.pairwise(bounds):
                 self._events_at(a)
+                if devices is not None:
+                    devices.at(a)
                 k = b - a
                 ts = np.arange(a, b) * h
                 ref, vel = self.plan.at(ts)
@@ -251,6 +262,8 @@ class _Run(PhysicsEvents):
                     if record[a + j]:
                         walls[j] = clock() - self.c0
                         self._collisions(float(ts[j]))
+                        if devices is not None:
+                            devices.sense(float(ts[j]))
                 if any(d.warning[w].number for w in _BAD) or not np.all(np.isfinite(qpos)):
                     raise ProgramError(
                         f"the physics became unstable before t = {b * h:.4g} s (timestep "
@@ -307,6 +320,8 @@ class _Run(PhysicsEvents):
         parts = {}
         for p in self.parts:
             adr = self.free_adr[p]
+            if final[adr + 2] > PARKED_ABOVE:  # out of the world in the plan's end
+                continue
             dof = int(m.jnt_dofadr[m.joint(self.cc.free_joints[p]).id])
             e_max, a_max, held = self.carry[p]
             s = parts[p] = SettledPart.of(

@@ -41,8 +41,11 @@ _REARM = 0.1  # s: a pair touching again after this long apart is a new collisio
 class PhysicsEvents:
     """Grasps, releases, collisions and the plan's events of a physics run (module doc)."""
 
-    def _event(self: _Run, t: float, robot: str | None, kind: str, detail: str) -> None:
-        heapq.heappush(self.events, (float(t), next(self.order), Event(t, robot, kind, detail)))
+    def _event(
+        self: _Run, t: float, robot: str | None, kind: str, detail: str, data: dict | None = None
+    ) -> None:
+        event = Event(t, robot, kind, detail, data=data)
+        heapq.heappush(self.events, (float(t), next(self.order), event))
 
     def _frames(self: _Run, ts: Array, walls: Array, rows: Array, *, last: bool = False) -> None:
         """Append frames and, in time order, the events up to their times (an event's frame
@@ -54,7 +57,7 @@ class PhysicsEvents:
             if k > i:
                 self.out.extend(ts[i:k], walls[i:k], rows[i:k])
                 i = k
-            self.out.add_event(e.t, e.robot, e.kind, e.detail)
+            self.out.add_event(e.t, e.robot, e.kind, e.detail, data=e.data)
         if i < len(ts):
             self.out.extend(ts[i:], walls[i:], rows[i:])
 
@@ -87,7 +90,7 @@ class PhysicsEvents:
                 acts = self.finger_act[g.robot]
                 self.pending.append((g.robot, g.part, self.act_adr[acts], opened[acts]))
                 centroid = np.empty(3)  # the part frame's centroid offset, turned to the world
-                offset = self.sim.cell.centroid_frame(g.part)[:3, 3]
+                offset = self.sim._centroids[g.part]
                 mujoco.mju_rotVecQuat(centroid, offset, d.qpos[adr + 3 : adr + 7])
                 where = ", ".join(f"{v:.4g}" for v in d.qpos[adr : adr + 3] + centroid)
                 detail = f"release '{g.part}': centroid ({where}) m"

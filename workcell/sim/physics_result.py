@@ -191,9 +191,10 @@ class PhysicsResult:
         """World position (m) of each movable part's centroid at the end, by name (as
         :meth:`Simulator.part_positions <workcell.sim.simulator.Simulator.part_positions>`)."""
         return {
-            p: (pose_from_pos_quat(s.position, s.quat) @ self.cell.centroid_frame(p))[
-                :3, 3
-            ].tolist()
+            p: (
+                pose_from_pos_quat(s.position, s.quat)
+                @ self.cell.centroid_frame(self.cell.pattern_of(p))
+            )[:3, 3].tolist()
             for p, s in self.parts.items()
         }
 

@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell.cell.compile_devices import is_parked
+from workcell.sim.throughput import throughput
 from workcell.sim.timeline import Events
 
 if TYPE_CHECKING:
@@ -68,11 +70,14 @@ class ReadBack:
 
     def part_positions(self: Simulator) -> dict[str, list[float]]:
         """World position (m) of each movable part's centroid, by name: the point grasps
-        aim at and ``place`` sets down (``part_pose`` gives the part frame's pose)."""
+        aim at and ``place`` sets down (``part_pose`` gives the part frame's pose). Parts
+        out of the world (a source's pattern and copies not made yet, parts a sink
+        removed: :mod:`workcell.cell.compile_devices`) are left out."""
         d = self.data
         return {
             p: (d.xpos[b] + d.xmat[b].reshape(3, 3) @ self._centroids[p]).tolist()
             for p, b in self._part_body.items()
+            if not is_parked(d.xpos[b][2])  # a source's copy not made yet, or removed
         }
 
     def clearance(self: Simulator, a: str, b: str) -> float:
@@ -86,7 +91,8 @@ class ReadBack:
 
     def summary(self: Simulator) -> dict[str, Any]:
         """The DESIGN.md ``workcell demo --json`` fields this slice knows (``mjcf`` None),
-        and ``commands``: the cycle-time records (:meth:`cycle_time`)."""
+        ``commands``: the cycle-time records (:meth:`cycle_time`), and ``throughput``: the
+        cell's results (:meth:`throughput`)."""
         return {
             "sim_time_s": self.sim_time,
             "wall_time_s": self._wall,
@@ -96,4 +102,15 @@ class ReadBack:
             "objects": self.part_positions(),
             "mjcf": None,
             "commands": self.cycle_time()["commands"],
+            "throughput": self.throughput(),
         }
+
+    def throughput(self: Simulator) -> dict[str, Any]:
+        """The cell's results (:mod:`workcell.sim.throughput`): parts per hour at each
+        sink, rising edges per hour of each bool signal, each robot's moving / waiting /
+        idle fractions of the simulated time."""
+        logic = self._logic
+        bools = (
+            [] if logic is None else [k for k, v in logic.initial.items() if isinstance(v, bool)]
+        )
+        return throughput(self.events, self.sim_time, self.robots, self.cell.sinks, bools)

@@ -98,6 +98,7 @@ from workcell.sim.contacts import (
     contact_model,
 )
 from workcell.sim.cycle import command_record
+from workcell.sim.devices import CellLogic
 from workcell.sim.frames import FrameRunner
 from workcell.sim.gripping import GraspRecord, GripperCommands, Hold
 from workcell.sim.motion import MotionCommands
@@ -105,6 +106,7 @@ from workcell.sim.planned import PlanningCommands
 from workcell.sim.profiles import step_times
 from workcell.sim.readback import ReadBack
 from workcell.sim.resting import RestingCommands
+from workcell.sim.signals import SignalCommands
 from workcell.sim.task_commands import TaskCommands
 from workcell.sim.timeline import DEFAULT_MEMORY_LIMIT, Timeline
 
@@ -126,6 +128,7 @@ class Simulator(
     TaskCommands,
     FrameRunner,
     ReadBack,
+    SignalCommands,
 ):
     """Kinematic simulator of a workcell (see the module doc).
 
@@ -219,16 +222,20 @@ class Simulator(
         self._gripper: dict[str, int] = {r: m.body(b).id for r, b in cc.gripper_bodies.items()}
         self._gripper_tree = {r: set(subtree_bodies(m, g)) for r, g in self._gripper.items()}
         self._weld = {k: m.equality(e).id for k, e in cc.welds.items()}
-        self._boxes = {p: cell.bounding_box(p) for p in cell.movable_parts}
-        self._centroids = {p: cell.centroid_frame(p)[:3, 3] for p in cell.movable_parts}
+        pattern = {p: cc.patterns.get(p, p) for p in cc.part_bodies}  # a copy's part
+        self._boxes = {p: cell.bounding_box(pattern[p]) for p in cc.part_bodies}
+        self._centroids = {p: cell.centroid_frame(pattern[p])[:3, 3] for p in cc.part_bodies}
         self._holds: dict[str, Hold] = {}
         self.grasps: list[GraspRecord] = []  # every grasp and release, in order
-        self._holders: dict[str, list[str]] = {p: [] for p in cell.movable_parts}
+        self._holders: dict[str, list[str]] = {p: [] for p in cc.part_bodies}
         self.contacts = ContactMonitor(cc, contact_tolerance, self.model)
         self._touching: set[tuple[str, str]] = set()
         self.sim_time = 0.0
         self._wall = 0.0
         self.timeline = Timeline(self.model.nq, memory_limit=memory_limit, spill_dir=spill_dir)
+        self._logic = CellLogic.of(self)  # the devices (None: the cell has none)
+        if self._logic is not None:
+            self._logic.start()
         self.timeline.append(0.0, 0.0, self.data.qpos)
         if self.check_collisions:
             mujoco.mj_collision(m, self.data)
@@ -289,14 +296,22 @@ class Simulator(
         self.timeline.add_event(self.sim_time, None, "mode", f"mode {mode}")
 
     def wait(self, seconds: float) -> None:
-        """Let ``seconds`` of simulated time pass with nothing moving (one frame at the end)."""
+        """Let ``seconds`` of simulated time pass, no robot moving: one frame at the end;
+        with devices, the cell alive (a frame every dt while belts or sources can change
+        something, :mod:`workcell.sim.signals`); in ``run_programs``, the other programs
+        go on (:mod:`workcell.logic`)."""
         if not (is_finite_number(seconds) and seconds >= 0):
             raise ProgramError(f"wait: seconds must be a finite number >= 0, got {seconds!r}")
         self._not_in_block("wait")
         s = float(seconds)
         limits.check("max_sim_time", self.sim_time + s, f"wait {s:.6g} s: the clock")
+        if self._block is not None:  # run_programs: the scheduler lets time pass
+            self._block.wait(self, s)
+            return
         with self._transaction():
-            if s > 0:
+            if s > 0 and self._logic is not None:
+                self._pass_time(s, "wait")
+            elif s > 0:
                 c0 = time.perf_counter()
                 self.timeline.append(self.sim_time + s, self._wall, self.data.qpos)
                 self.sim_time += s

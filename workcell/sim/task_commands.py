@@ -183,26 +183,29 @@ class TaskCommands(ChoiceHelpers):
     def _world_meshes(self) -> Iterator:
         for p in self.cell.static_parts.values():
             yield self.cell.model.world_mesh(p.entity).copy().apply_transform(p.pose)
-        for p in self.cell.movable_parts.values():
-            yield (
-                self.cell.model.world_mesh(p.entity).copy().apply_transform(self.part_pose(p.name))
-            )
+        for name in self.part_positions():  # the movable parts in the world, copies too
+            entity = self.cell.movable_parts[self.cell.pattern_of(name)].entity
+            yield self.cell.model.world_mesh(entity).copy().apply_transform(self.part_pose(name))
 
     def _place_xy(self, name: str, part: str, on: object, position: ArrayLike | None) -> Array:
         cell = self.cell
         if (
             not isinstance(on, str)
             or on == part
-            or (on not in cell.static_parts and on not in cell.movable_parts)
+            or (on not in cell.static_parts and cell.pattern_of(on) not in cell.movable_parts)
         ):
-            known = [n for n in (*cell.static_parts, *cell.movable_parts) if n != part]
+            known = [n for n in (*cell.static_parts, *self.part_positions()) if n != part]
             raise ProgramError(
                 f"place '{name}': no support {on!r}; static and movable parts: {', '.join(known)}"
             )
         if self._holders.get(on):
             raise ProgramError(f"place '{name}': '{on}' is held by '{self._holders[on][0]}'")
         if position is None:
-            entity = cell.static_parts[on] if on in cell.static_parts else cell.movable_parts[on]
+            entity = (
+                cell.static_parts[on]
+                if on in cell.static_parts
+                else cell.movable_parts[cell.pattern_of(on)]
+            )
             pose = entity.pose if on in cell.static_parts else self.part_pose(on)
             mesh = cell.model.world_mesh(entity.entity).copy().apply_transform(pose)
             return top_face(mesh)[0][:2]
