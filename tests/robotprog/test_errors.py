@@ -113,7 +113,7 @@ CASES = [
         LS_HEAD + "   1:  WAIT DI[1]=ON ;\n/POS\n/END\n",
         4,
         8,
-        "nothing in this cell can change it",
+        "the cell has no signal of that name",
     ),
     ("a.ls", LS_HEAD + "   1:  R[1]=1 \n/POS\n/END\n", 4, 14, "';'"),
 ]

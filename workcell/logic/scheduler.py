@@ -327,7 +327,10 @@ class Run:
         if seconds > 0:
             p.state, p.wake, p.since = "time", t0 + seconds, t0
             self._block_current()
-        rec = self.sim._command_record(p.robot, "wait", t0, sim.sim_time - t0, "wait")
+        asked = {"kind": "wait", "seconds": sim.sim_time - t0}
+        rec = self.sim._command_record(
+            p.robot, "wait", t0, sim.sim_time - t0, "wait", program=asked
+        )
         rec["program_name"] = p.name
         sim.timeline.add_event(sim.sim_time, p.robot, "wait", f"wait {seconds:.6g} s", data=rec)
 

@@ -116,7 +116,6 @@ BRANCHES: dict[str, Node] = {
     "place": PLACE,
     "handover": HANDOVER,
     "export": _EXPORT,
-    "run": _RUN,
     "wait": Seq(
         Number("seconds", "time", what="seconds"),
         Leaf(
@@ -173,6 +172,8 @@ BRANCHES: dict[str, Node] = {
         lambda v: simc.PartPositions(), "positions", "movable parts' centroids (m)"
     ),
     **grammar_logic.BRANCHES,
+    # 'run program ROBOT FILE' (a robot program) beside 'run programs' (programs together)
+    "run": Keys({**_RUN.branches, **grammar_logic.BRANCHES["run"].branches}),  # type: ignore[attr-defined]
 }
 
 # the Simulator's method names, accepted as keywords too (not offered in completion)

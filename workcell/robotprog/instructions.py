@@ -175,10 +175,16 @@ def tcp_of(robot: Robot) -> Array:
 
 
 def _records(sim: Any, robot: str) -> list[dict[str, Any]]:
-    """The robot's command records and the cell's waits, in order of their start."""
-    recs = [e.data for e in sim.events if e.data is not None and "program" in e.data]
+    """The robot's command records and the cell's own waits and signal commands, in order
+    of their start; with programs that ran together (``Simulator.run_programs``), the
+    robot's program's only (not a controller program's waits and signals)."""
+    recs = [e.data for e in sim.events() if e.data is not None and "program" in e.data]
     order = sorted(range(len(recs)), key=lambda i: (recs[i]["t_start"], i))
-    return [recs[i] for i in order if recs[i]["robot"] in (robot, None)]
+    return [
+        recs[i]
+        for i in order
+        if recs[i]["robot"] == robot or (recs[i]["robot"] is None and "program_name" not in recs[i])
+    ]
 
 
 def _speed(p: Mapping[str, Any]) -> JointSpeed:

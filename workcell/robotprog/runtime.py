@@ -19,9 +19,12 @@ the same semantics as a program written against the simulator:
 - Cartesian joint targets: the solution the vendor's configuration names
   (:func:`~workcell.robotprog.configs.select`);
 - outputs: the one named ``gripper`` closes (True) and opens the robot's gripper; others
-  set the cell's signal of that name when the simulator has signals (else they are only
-  kept in :attr:`VM.outputs`); input waits need the cell's signals: without them an
-  input is False, and waiting for one to be True is a ProgramError saying so.
+  set the cell's signal of that name (:meth:`~workcell.sim.Simulator.set_signal`; 1/0
+  for an int or float signal) when the cell has one (else they are only kept in
+  :attr:`VM.outputs`); inputs read the cell's signal of their name, and an input wait
+  is :meth:`~workcell.sim.Simulator.wait_signal` (time passes, the cell goes on). An
+  input the cell has no signal for is False, and waiting for it to be True is a
+  ProgramError saying so.
 
 Every error names the file, line and column of the statement that failed. The work is
 bounded: ``limits.max_program_steps`` statements, routine calls 64 deep.
@@ -306,6 +309,9 @@ class Executor:
         sim = self.sim
         if self.trapezoid is not None:
             v, a = self.trapezoid
+            top = float(np.max(sim.cell.robots[self.robot].robot.max_speeds))
+            if top < v <= top * (1 + 1e-9):  # the file's last digit rounded the top speed up
+                v = top
             if sim.profile != "trapezoid" or abs(sim.acceleration - a) > 1e-12:
                 sim.set_profile("trapezoid", a)
             if abs(sim.speed(self.robot) - v) > 1e-12:
@@ -380,31 +386,34 @@ class Executor:
             raise ProgramError(f"{what} needs seconds >= 0, got {s:g}")
         self.sim.wait(s)
 
+    def _signal(self, name: str) -> type | None:
+        """The type of the cell's signal ``name`` (bool, int, float), None when the cell has
+        no signal of that name."""
+        value = self.sim.signals().get(name) if name else None
+        return None if value is None else type(value)
+
     def set_output(self, number: int, name: str, value: bool) -> None:
         if name.lower() == GRIPPER:
             if value:
                 self.sim.close_gripper(self.robot)
             else:
                 self.sim.open_gripper(self.robot)
-        elif hasattr(self.sim, "set_signal"):
-            self.sim.set_signal(name, bool(value))
+        elif (kind := self._signal(name)) is not None:
+            self.sim.set_signal(name, kind(bool(value)))
         self.outputs[number] = bool(value)
 
     def input(self, number: int, name: str) -> bool:
-        if name and hasattr(self.sim, "signal"):
-            try:
-                return bool(self.sim.signal(name))
-            except WorkcellError:
-                return False
-        return False
+        return bool(self.sim.signal(name)) if self._signal(name) is not None else False
 
     def wait_input(self, number: int, name: str, value: bool) -> None:
         if self.input(number, name) == value:
             return
-        if name and hasattr(self.sim, "wait_signal"):
-            self.sim.wait_signal(name, value)
+        if (kind := self._signal(name)) is not None:
+            self.sim.wait_signal(name, kind(bool(value)))
             return
+        known = ", ".join(self.sim.signals()) or "none"
         raise ProgramError(
             f"waits for input {number}{f' ({name})' if name else ''} to be {value}, but "
-            "nothing in this cell can change it (the simulator has no signals for it)"
+            f"the cell has no signal of that name to change it (its signals: {known}; "
+            "declare one with add_signal, or name the input after one)"
         )

@@ -82,7 +82,8 @@ class SignalCommands:
         self._not_in_block("set_signal")  # refused in concurrently(); a program's robot stops
         block = self._block
         robot = None if block is None else block.robot_of_program()
-        rec = command_record(robot, "set_signal", self.sim_time, 0.0)
+        asked = {"kind": "set_signal", "name": name, "value": v}
+        rec = command_record(robot, "set_signal", self.sim_time, 0.0, program=asked)
         rec.update(signal=name, value=v)
         if block is not None:
             block.tag(rec)
@@ -244,7 +245,8 @@ class SignalCommands:
     ) -> None:
         """The ``wait_signal`` event (its record); SignalTimeout when it timed out."""
         dur = self.sim_time - t0
-        rec = command_record(robot, "wait_signal", t0, dur, "signal")
+        asked = {"kind": "wait_signal", "name": name, "value": value, "timeout": timeout}
+        rec = command_record(robot, "wait_signal", t0, dur, "signal", program=asked)
         rec.update(signal=name, value=value, timeout=timeout)
         if not matched:
             rec["note"] = "timed out"
