@@ -156,6 +156,7 @@ class _Run(PhysicsEvents):
         self.grip = GripContacts(m, cc, switching=not options["grip_contacts"])
         self.compiled = replace(cc, model=m)
         self.monitor = ContactMonitor(self.compiled, 0.0)  # every contact; _collisions sorts
+        self.monitor.allowed = set(sim.contacts.allowed)  # mounted robots (contacts.mount)
         d = self.d = mujoco.MjData(m)
         d.qpos[:] = sim.timeline.frame(0)[2]
         mujoco.mj_forward(m, d)
