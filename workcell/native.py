@@ -54,6 +54,7 @@ __all__ = ["Job", "run"]
 _HEADER = struct.Struct("<Q")
 _TAIL = 2000  # characters of the child's stderr kept for an error message
 _THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+_PACKAGE = __name__.split(".")[0] + "."  # "workcell.": only its functions run in children
 _PACKAGE_ROOT = str(Path(__file__).resolve().parent.parent)
 
 
@@ -86,7 +87,7 @@ def run(
     every child is gone when this returns or raises, Ctrl-C included.
     """
     for job in jobs:
-        if not job.function.startswith("workcell.") or ":" not in job.function:
+        if not job.function.startswith(_PACKAGE) or ":" not in job.function:
             raise ValueError(f"native jobs call workcell functions only, got {job.function!r}")
     if not jobs:
         return []

@@ -47,7 +47,7 @@ def _shell(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from workcell.cli import check_outputs
+    from workcell.cli_common import check_outputs
     from workcell.errors import WorkcellError
     from workcell.program.interpreter import run_script
     from workcell.program.session import Session
@@ -180,7 +180,7 @@ def register(sub: Any) -> None:
         "limit that set it",
     )
     run.add_argument("--save", metavar="FILE.rrd", help="record the run (also up to an error)")
-    from workcell.cli import add_record_fps
+    from workcell.cli_common import add_record_fps
 
     add_record_fps(run)
     run.add_argument("--render", metavar="FILE.png", help="a contact sheet of the run's key frames")
@@ -240,7 +240,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="workcell")
     register(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)
-    from workcell.cli import run_command
+    from workcell.cli_common import run_command
 
     return run_command(args)
 

@@ -77,7 +77,7 @@ def _concavity_option(parser: argparse.ArgumentParser) -> None:
 
 
 def _render(args: argparse.Namespace) -> int:
-    from workcell.cli import check_outputs
+    from workcell.cli_common import check_outputs
     from workcell.record.render import gl_backend, render_cell, save_png
 
     check_outputs(png=args.out)

@@ -66,8 +66,9 @@ import rerun.blueprint as rrb
 from numpy.typing import NDArray
 from tqdm import tqdm
 
+from workcell.cli_common import check_recording_path
 from workcell.errors import RecordError
-from workcell.files import atomic_path, check_writable
+from workcell.files import atomic_path
 from workcell.record.rr_frames import Frames, log_events
 from workcell.record.rr_rates import Rates, acceleration_entity, speed_entity
 from workcell.record.rr_scene import (
@@ -246,16 +247,6 @@ def _spawn_viewer(port: int) -> str:
     """Start a rerun viewer listening on ``port``; return its gRPC URL."""
     rr.spawn(port=port, connect=False)
     return f"rerun+http://127.0.0.1:{port}/proxy"
-
-
-def check_recording_path(path: str | os.PathLike[str]) -> Path:
-    """``path`` if a recording can be written there (an ``.rrd`` name in a writable folder,
-    see :func:`workcell.files.check_writable`), else RecordError; call it before the work."""
-    target = Path(path)
-    if target.suffix != ".rrd":
-        raise RecordError(f"a recording file must end in .rrd, got '{target}'")
-    check_writable(target, error=RecordError)
-    return target
 
 
 def record(

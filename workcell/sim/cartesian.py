@@ -292,7 +292,7 @@ class CartesianCommands:
         ``config``: configuration letters to require (e.g. "ru"); default: the
         in-limit solution nearest the current joints. ``zone`` (m): blend into the next
         move. Raises UnreachableError saying why. With ``plan``, a collision-free joint
-        path to the nearest solution that has one (:mod:`workcell.plan.motion`; it stops
+        path to the nearest solution that has one (:mod:`workcell.sim.planned`; it stops
         at its end: no zone); PlanningError when the pose is unreachable, every solution
         is in collision or no path is found.
         """

@@ -161,7 +161,7 @@ class GripperCommands:
         that robot carries it from now on. Released in mid-air (more than the contact
         tolerance above what is below it), it gets a ``warning`` event; with ``settle`` it
         drops straight onto the highest support below it instead, in one frame
-        (:mod:`workcell.plan.resting`).
+        (:mod:`workcell.sim.resting`).
         """
         name = self._robot(robot)
         self._not_in_block("open_gripper")
