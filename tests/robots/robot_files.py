@@ -1,7 +1,10 @@
 """Robot files the tests write: URDF and MJCF arms with meshes, primitives, branches.
 
 Nothing third-party: every file is generated here (meshes by trimesh), except the real
-ROS-Industrial files that the test-only ``rtb-data`` package ships (:data:`RTB`).
+ROS-Industrial files that the test-only ``rtb-data`` package ships (:data:`RTB`) and
+pybullet's arms in the test-only ``pybullet`` package (:data:`PYBULLET`):
+:data:`REAL_ROBOTS` names each arm there, :func:`real_robot` gives its URDF (compiling a
+xacro with xacrodoc) and the ``from_urdf`` arguments that find its meshes.
 """
 
 from __future__ import annotations
@@ -17,6 +20,76 @@ try:
     RTB: Path | None = Path(rtbdata.__path__[0]) / "xacro"
 except ImportError:  # pragma: no cover - rtb-data is a test dependency
     RTB = None
+try:
+    import pybullet_data
+
+    PYBULLET: Path | None = Path(pybullet_data.getDataPath())
+except ImportError:  # pragma: no cover - pybullet is a test dependency
+    PYBULLET = None
+
+_KUKA = "kuka_description"
+# name -> (where: "rtb" or "pybullet", the URDF or xacro file, its package folder)
+REAL_ROBOTS: dict[str, tuple[str, str, str]] = {
+    "kr3r540": ("rtb", f"{_KUKA}/kuka_kr3/urdf/kr3r540.xacro", f"{_KUKA}/kuka_kr3"),
+    "kr5_arc": ("rtb", f"{_KUKA}/kuka_kr5/urdf/kr5_arc.xacro", f"{_KUKA}/kuka_kr5"),
+    "kr6r700sixx": ("rtb", f"{_KUKA}/kuka_kr6/urdf/kr6r700sixx.xacro", f"{_KUKA}/kuka_kr6"),
+    "kr6r900sixx": ("rtb", f"{_KUKA}/kuka_kr6/urdf/kr6r900sixx.xacro", f"{_KUKA}/kuka_kr6"),
+    "kr10r1100sixx": ("rtb", f"{_KUKA}/kuka_kr10/urdf/kr10r1100sixx.xacro", f"{_KUKA}/kuka_kr10"),
+    "kr16_2": ("rtb", f"{_KUKA}/kuka_kr16/urdf/kr16_2.urdf", f"{_KUKA}/kuka_kr16"),
+    "kr120r2500pro": ("rtb", f"{_KUKA}/kuka_kr120/urdf/kr120r2500pro.urdf", f"{_KUKA}/kuka_kr120"),
+    "kr150_2": ("rtb", f"{_KUKA}/kuka_kr150/urdf/kr150_2.xacro", f"{_KUKA}/kuka_kr150"),
+    "kr210l150": ("rtb", f"{_KUKA}/kuka_kr210/urdf/kr210l150.urdf", f"{_KUKA}/kuka_kr210"),
+    "lbr_iiwa_14_r820": (
+        "rtb", f"{_KUKA}/kuka_lbr_iiwa/urdf/lbr_iiwa_14_r820.urdf", f"{_KUKA}/kuka_lbr_iiwa"
+    ),
+    "irb140": ("rtb", "abb_irb140_description/urdf/irb140.urdf", "abb_irb140_description"),
+    "puma560": (
+        "rtb",
+        "unimation_puma560_description/urdf/puma560_robot.urdf.xacro",
+        "unimation_puma560_description",
+    ),
+    "al5d": (
+        "rtb", "lynxmotion_al5d_description/urdf/al5d_robot.urdf", "lynxmotion_al5d_description"
+    ),
+    "panda": (
+        "rtb", "qut_frankie_description/robots/panda_arm_hand.urdf.xacro", "qut_frankie_description"
+    ),
+    **{
+        t: ("rtb", f"trossen_descriptions/urdf/{t}.urdf.xacro", "trossen_descriptions")
+        for t in ("px100", "px150", "rx150", "rx200", "wx200", "wx250", "wx250s", "vx250",
+                  "vx300", "vx300s")
+    },
+    "pybullet_iiwa": ("pybullet", "kuka_iiwa/model.urdf", "kuka_iiwa"),
+    "pybullet_panda": ("pybullet", "franka_panda/panda.urdf", "franka_panda"),
+}  # fmt: skip
+
+
+def real_robot(name: str, folder: Path) -> tuple[Path, dict]:
+    """The URDF of :data:`REAL_ROBOTS` ``name`` (a xacro is compiled into ``folder``) and
+    the ``from_urdf`` keywords that find its meshes (its package folder to search)."""
+    where, rel, pkg = REAL_ROBOTS[name]
+    base = RTB if where == "rtb" else PYBULLET
+    if base is None:  # pragma: no cover - test dependencies
+        raise FileNotFoundError(f"the {where} package is not installed")
+    path = base / rel
+    if path.suffix == ".xacro":
+        from xacrodoc import XacroDoc, packages
+
+        kuka = base / _KUKA
+        packages.update_package_cache(
+            {
+                **{f"kuka_{k}_support": str(kuka / f"kuka_{k}") for k in
+                   ("kr3", "kr5", "kr6", "kr10", "kr16", "kr120", "kr150", "kr210")},
+                "kuka_resources": str(kuka / "kuka_resources"),
+                "qut_frankie_description": str(base / "qut_frankie_description"),
+            }
+        )  # fmt: skip
+        text = XacroDoc.from_file(path, resolve_packages=False).to_urdf_string()
+        folder.mkdir(parents=True, exist_ok=True)
+        path = folder / f"{name}.urdf"
+        path.write_text(text)
+    return path, {"search": [base / pkg]}
+
 
 RTB_FILES = {
     "kr16": "kuka_description/kuka_kr16/urdf/kr16_2.urdf",

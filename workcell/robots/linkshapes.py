@@ -49,9 +49,9 @@ __all__ = ["LINK_CONCAVITY", "LINK_HULL_FIT", "LINK_OPTIONS", "LINK_SECONDS", "L
 
 LINK_CONCAVITY = 0.1  # CoACD's threshold for robot links (parts: 0.05)
 LINK_OPTIONS: dict[str, object] = {
-    "preprocess_resolution": 20,  # CoACD's default 50
-    "resolution": 1000,  # 2000
-    "mcts_iterations": 30,  # 150
+    "preprocess_resolution": 20,  # CoACD's default 50 (its documented range 20-100)
+    "resolution": 500,  # 2000: surface samples of the concavity measure
+    "mcts_iterations": 20,  # 150
     "mcts_nodes": 10,  # 20
     "mcts_max_depth": 2,  # 3
 }
