@@ -288,3 +288,95 @@ def arm_mjcf(*, mesh: str = "meshes/arm.stl", extra_body: str = "", gripper: boo
   </keyframe>
 </mujoco>
 """
+
+
+def menagerie_like(folder: Path, *, assets: bool = True) -> Path:
+    """A MuJoCo Menagerie-like arm (written here, laid out as Menagerie's are): ``arm.xml``
+    with ``<compiler meshdir="assets">``, visual and collision default classes, meshes
+    named by their files only or by name, explicit inertials, a keyframe and a parallel
+    hand; ``scene.xml`` includes it and adds a floor. ``assets`` False leaves the mesh
+    folder out (as a copy without ``assets/``). Returns scene.xml's path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    if assets:
+        (folder / "assets").mkdir(exist_ok=True)
+        trimesh.creation.box(extents=(0.2, 0.2, 0.1)).export(folder / "assets/base.stl")
+        trimesh.creation.cylinder(radius=0.05, height=0.3, sections=16).export(
+            folder / "assets/link1.stl"
+        )
+        trimesh.creation.box(extents=(0.06, 0.06, 0.35)).export(folder / "assets/upper.obj")
+        trimesh.creation.box(extents=(0.05, 0.05, 0.3)).export(folder / "assets/fore.stl")
+    (folder / "arm.xml").write_text(
+        """<mujoco model="menagerie_like">
+  <compiler angle="radian" meshdir="assets" autolimits="true"/>
+  <default>
+    <default class="arm">
+      <joint axis="0 0 1" range="-2.9 2.9"/>
+      <default class="visual"><geom type="mesh" contype="0" conaffinity="0" group="2"/></default>
+      <default class="collision"><geom type="mesh" group="3"/></default>
+      <default class="finger"><joint type="slide" axis="0 1 0" range="0 0.04"/></default>
+    </default>
+  </default>
+  <asset>
+    <material name="white" rgba="1 1 1 1"/>
+    <mesh file="base.stl"/>
+    <mesh name="link1_c" file="link1.stl"/>
+    <mesh file="upper.obj" scale="1 1 1"/>
+    <mesh name="fore" file="fore.stl"/>
+  </asset>
+  <worldbody>
+    <body name="link0" childclass="arm">
+      <inertial mass="4" pos="0 0 0.05" diaginertia="0.02 0.02 0.02"/>
+      <geom mesh="base" class="visual" material="white"/>
+      <geom mesh="base" class="collision"/>
+      <body name="link1" pos="0 0 0.333">
+        <inertial mass="5" pos="0 0 -0.05" diaginertia="0.05 0.05 0.0125"/>
+        <joint name="joint1"/>
+        <geom mesh="link1_c" class="collision"/>
+        <geom mesh="link1_c" class="visual"/>
+        <body name="link2" quat="1 -1 0 0">
+          <inertial mass="3" pos="0 -0.15 0" diaginertia="0.03 0.006 0.03"/>
+          <joint name="joint2" range="-1.76 1.76"/>
+          <geom mesh="upper" class="visual"/>
+          <body name="link3" pos="0 -0.316 0" quat="1 1 0 0">
+            <inertial mass="2" pos="0.04 0 -0.1" diaginertia="0.02 0.02 0.004"/>
+            <joint name="joint3"/>
+            <geom mesh="fore" class="collision"/>
+            <body name="link4" pos="0.0825 0 0" quat="1 1 0 0">
+              <inertial mass="1" pos="0 0.05 0" diaginertia="0.005 0.002 0.005"/>
+              <joint name="joint4" range="-3.07 -0.07"/>
+              <geom type="capsule" fromto="0 0 0 0 0.1 0" size="0.03" class="visual"/>
+              <body name="hand" pos="0 0.1 0" quat="1 -1 0 0">
+                <inertial mass="0.5" pos="0 0 0.03" diaginertia="0.001 0.001 0.001"/>
+                <geom type="box" size="0.02 0.08 0.02" class="visual"/>
+                <body name="left_finger" pos="0 0 0.058">
+                  <inertial mass="0.02" pos="0 0 0.02" diaginertia="1e-5 1e-5 1e-5"/>
+                  <joint name="finger1" class="finger"/>
+                  <geom type="box" size="0.01 0.005 0.02" pos="0 0.005 0.02" class="visual"/>
+                </body>
+                <body name="right_finger" pos="0 0 0.058" quat="0 0 0 1">
+                  <inertial mass="0.02" pos="0 0 0.02" diaginertia="1e-5 1e-5 1e-5"/>
+                  <joint name="finger2" class="finger"/>
+                  <geom type="box" size="0.01 0.005 0.02" pos="0 0.005 0.02" class="visual"/>
+                </body>
+              </body>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <keyframe>
+    <key name="home" qpos="0 0.3 0 -1.5 0.04 0.04"/>
+  </keyframe>
+</mujoco>
+"""
+    )
+    scene = folder / "scene.xml"
+    scene.write_text(
+        """<mujoco model="scene">
+  <include file="arm.xml"/>
+  <worldbody><geom name="floor" type="plane" size="1 1 0.05"/></worldbody>
+</mujoco>
+"""
+    )
+    return scene
