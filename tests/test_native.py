@@ -128,8 +128,8 @@ def test_a_job_over_its_own_bound_gives_the_callers_value_and_the_others_go_on()
     assert sorted(done) == [(0, "torus"), (1, "box")]
     assert time.monotonic() - t0 < 40
     assert children_of(os.getpid()) == []
-    with pytest.raises(LimitError, match=r"torus: .* s is over the 5 s it may take"):
-        native.run(jobs[:1], seconds=5.0)  # no on_timeout: an error, as for the limit
+    with pytest.raises(LimitError, match=r"torus: .* s is over the 1 s it may take"):
+        native.run(jobs[:1], seconds=1.0)  # no on_timeout: an error, as for the limit
     assert children_of(os.getpid()) == []
 
 
