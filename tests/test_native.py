@@ -131,6 +131,11 @@ def test_a_job_over_its_own_bound_gives_the_callers_value_and_the_others_go_on()
     with pytest.raises(LimitError, match=r"torus: .* s is over the 1 s it may take"):
         native.run(jobs[:1], seconds=1.0)  # no on_timeout: an error, as for the limit
     assert children_of(os.getpid()) == []
+    # a bound in CPU seconds: the child's own time (whatever else the machine runs)
+    late.clear()
+    assert native.run(jobs[:1], seconds=1.0, on_timeout=over, cpu=True) == ["too late"]
+    assert late[0][2] >= 1.0  # wall seconds: at least the CPU seconds of one thread
+    assert children_of(os.getpid()) == []
 
 
 def test_out_of_memory_in_the_child_is_a_model_error():

@@ -319,9 +319,11 @@ def decompositions(
 
     ``concavity``: the error bound in (0, 1] (module doc); ``options``: CoACD's other
     parameters (:data:`COACD_OPTIONS`); ``hull_fit``: a mesh whose hull fits is its hull;
-    ``seconds``: the wall time each mesh may take (at most ``max_native_seconds``), after
-    which it is its hull (method "timeout", remembered in the cache with the bound: a
-    later call with a larger bound tries again);
+    ``seconds``: the CPU time each mesh may take (its child's, so the outcome does not
+    depend on the machine's load; ``max_native_seconds`` still bounds the wall time),
+    after which it is its hull (method "timeout", remembered in the cache with the bound:
+    a later call with a larger bound tries again; a run over ``max_native_seconds`` of
+    wall time is its hull too, not remembered);
     ``labels`` name the meshes in messages; ``on_start(n)`` is called before ``n`` meshes
     go to child processes (not when all come from the cache), ``on_done(i, label,
     seconds)`` as each of them is done.
@@ -363,7 +365,8 @@ def decompositions(
             jobs,
             on_done=done,
             seconds=bound,
-            on_timeout=None if bound is None else lambda k, label, s: ("timeout", []),
+            on_timeout=None if bound is None else lambda k, label, s: (_late(s), []),
+            cpu=True,
         )
         if jobs
         else []
@@ -371,9 +374,12 @@ def decompositions(
     for k, (i, (method, arrays)) in enumerate(zip(todo, found, strict=True)):
         pieces = [trimesh.Trimesh(v, f, process=False) for v, f in arrays]
         if not pieces:
-            method = "timeout" if method == "timeout" else "unsplit"
+            method = "unsplit" if method == "coacd" else method
             pieces = [_hull(meshes[i], names[i])]
-        _store(paths[i], pieces, method, bound or 0.0)
+        if method == "wall":  # out of wall time: the machine's load, not the mesh
+            method = "timeout"
+        else:
+            _store(paths[i], pieces, method, bound or 0.0)
         out[i] = Decomposition(pieces, method, took.get(k, 0.0))
     return [d for d in out if d is not None]
 
@@ -405,6 +411,12 @@ def decompose_many(
     if talk:
         print(f"workcell: decomposed in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return [d.pieces for d in out]
+
+
+def _late(wall: float) -> str:
+    """How a mesh ran out of time after ``wall`` seconds: "wall" (``max_native_seconds``)
+    or "timeout" (its own CPU bound)."""
+    return "wall" if wall >= limits.current().max_native_seconds else "timeout"
 
 
 def _hull(mesh: trimesh.Trimesh, label: str) -> trimesh.Trimesh:

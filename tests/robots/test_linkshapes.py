@@ -90,7 +90,10 @@ def test_unknown_coacd_options_are_refused():
         dec.decompositions([l_shape()], options={"resolution": float("nan")})
 
 
-def test_a_mesh_over_its_time_is_its_hull_and_that_is_remembered_with_the_bound(monkeypatch):
+def test_a_mesh_over_its_time_is_its_hull_and_that_is_remembered_with_the_bound(
+    monkeypatch, tmp_path
+):
+    monkeypatch.setenv(dec.CACHE_ENV, str(tmp_path))  # fake pieces below: kept to this test
     ring = torus()
     [d] = dec.decompositions([ring], seconds=1.0)
     assert d.method == "timeout"
