@@ -119,3 +119,16 @@ def test_a_wall_touching_the_base_from_the_side_is_no_mount(robot):
     sim = Simulator(cell)
     assert abs(sim.clearance("arm.link0", "wall")) < 1e-6  # it touches the base
     assert sim.contacts.mounts == {"arm": ["table"]}
+
+
+def test_in_physics_link_1_turns_freely_on_its_mount_and_parts_still_rest_on_it(robot):
+    from workcell.sim.physics import run_physics
+
+    sim = Simulator(cell_with(robot))
+    sim.move_joints_absolute("arm", np.radians([60, -80, 90, 0, 45, 0]))
+    s = run_physics(sim).summary()
+    tracking = s["physics"]["tracking"]["arm"]["joint_max_each_rad"]
+    assert tracking[0] < 0.01  # held back by its contact with the table: 0.9 rad
+    assert s["collisions"] == 0
+    assert s["physics"]["parts"]["cube"]["resting"]
+    assert s["physics"]["parts"]["cube"]["distance_m"] < 1e-4  # on the table, not through it

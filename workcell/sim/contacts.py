@@ -201,6 +201,16 @@ class ContactMonitor:
                     found = True
         return found
 
+    def allowed_geoms(self) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """(the geoms of the robots' link 1, the geoms of what they stand on) of
+        :attr:`allowed` (for the physics mode's contact bits)."""
+        robot_side = {x for pair in self.allowed for x in pair if self.robot_of(x) is not None}
+        other = {x for pair in self.allowed for x in pair} - robot_side
+        pick = [
+            [int(g) for g in self.colliding if self.labels[g] in s] for s in (robot_side, other)
+        ]
+        return np.array(pick[0], dtype=np.intp), np.array(pick[1], dtype=np.intp)
+
     # ------------------------------------------------------------------ queries
     def exclude(self, bodies_a: Iterable[int], bodies_b: Iterable[int]) -> set[tuple[int, int]]:
         """The (low, high) body pairs between two body sets (to add to :attr:`excluded`)."""
