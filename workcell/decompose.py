@@ -341,7 +341,11 @@ def decompositions(
         if hit is not None and hit[1] == "timeout" and (bound is None or bound > hit[2]):
             hit = None  # more time now: try again
         out.append(None if hit is None else Decomposition(hit[0], hit[1]))
-    todo = [i for i, d in enumerate(out) if d is None]
+    first: dict[Path, int] = {}  # the same mesh twice (a left and a right finger): once
+    for i, d in enumerate(out):
+        if d is None:
+            first.setdefault(paths[i], i)
+    todo = list(first.values())
     fit = None if hull_fit is None else (float(hull_fit.distance), float(hull_fit.volume))
     jobs = [
         native.Job(
@@ -381,6 +385,9 @@ def decompositions(
         else:
             _store(paths[i], pieces, method, bound or 0.0)
         out[i] = Decomposition(pieces, method, took.get(k, 0.0))
+    for i, d in enumerate(out):
+        if d is None:
+            out[i] = out[first[paths[i]]]
     return [d for d in out if d is not None]
 
 

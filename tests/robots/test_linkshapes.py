@@ -183,3 +183,19 @@ def test_a_terminal_shows_a_progress_bar(monkeypatch, capsys):
     err = capsys.readouterr().err
     assert "arm: link collision geometry" in err  # tqdm's bar, with its time estimate
     assert "1/1" in err
+
+
+def test_the_same_mesh_twice_in_a_batch_is_decomposed_once(monkeypatch, tmp_path):
+    monkeypatch.setenv(dec.CACHE_ENV, str(tmp_path))
+    finger = l_shape()
+    runs = []
+
+    def fake(jobs, **kwargs):
+        runs.append(len(jobs))
+        return [("coacd", [(p.vertices, p.faces) for p in (finger.convex_hull,)])] * len(jobs)
+
+    monkeypatch.setattr("workcell.native.run", fake)
+    left, right, other = dec.decompositions([finger, finger.copy(), notched_box()], seconds=10)
+    assert runs == [2]  # the left and the right finger are one mesh
+    assert left.pieces is right.pieces
+    assert other.method == "coacd"
