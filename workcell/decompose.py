@@ -51,12 +51,13 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
-from scipy.spatial import QhullError, cKDTree
+from scipy.spatial import QhullError
 
 from workcell import limits
 from workcell.checks import is_finite_number
 from workcell.errors import DegenerateError, GeometryError
 from workcell.files import atomic_write_bytes
+from workcell.hullfit import HullFit, hull_deviation
 
 __all__ = [
     "CACHE_ENV",
@@ -84,8 +85,6 @@ COACD_OPTIONS = frozenset(
         "max_ch_vertex", "extrude", "extrude_margin", "apx_mode",
     }
 )  # fmt: skip
-_SPACING = 0.005  # hull_deviation's sampling step, x the bounding-box diagonal
-_NEAR = 8  # hull_deviation: facets of this many nearest samples are measured exactly
 _SEED = 0
 _MIN_PIECE_VOLUME = 1e-12  # m^3: slivers below this are dropped (MuJoCo refuses flat meshes)
 
@@ -106,18 +105,6 @@ def _coacd_version() -> str:
         return version("coacd")
     except PackageNotFoundError:  # pragma: no cover - coacd is a dependency
         return "unknown"
-
-
-@dataclass(frozen=True)
-class HullFit:
-    """When a mesh's convex hull stands for it, with no decomposition: the hull lies
-    within ``distance`` x the mesh's bounding-box diagonal of the mesh's surface
-    everywhere (the one-sided Hausdorff distance from the hull's surface to the mesh's),
-    and, for a closed mesh, adds at most ``volume`` x the mesh's volume (an open mesh has
-    no volume: the distance alone decides). See :func:`hull_deviation`."""
-
-    distance: float
-    volume: float
 
 
 @dataclass(frozen=True)
@@ -223,36 +210,6 @@ def coacd_pieces(
         if hull.volume > _MIN_PIECE_VOLUME:
             out.append((np.asarray(hull.vertices), np.asarray(hull.faces)))
     return out
-
-
-def hull_deviation(mesh: trimesh.Trimesh) -> tuple[float, float | None]:
-    """How far the convex hull of ``mesh`` strays from it: (the largest distance from the
-    hull's surface to the mesh's surface / the mesh's bounding-box diagonal, the hull's
-    volume over the mesh's minus 1, or None for a mesh that is not closed).
-
-    The distance is measured from points on the hull's surface (its facets' centres and
-    5,000 samples) to the mesh's facets, exactly to the facets of the :data:`_NEAR`
-    nearest of dense samples of the mesh's surface (a step of :data:`_SPACING` = 0.5 % of
-    the diagonal, every facet's centre included): never below the true distance at those
-    points; the points themselves may miss the farthest spot by about their spacing.
-    Seeded: the same mesh gives the same numbers. Units: none (ratios)."""
-    hull = mesh.convex_hull
-    diag = float(np.linalg.norm(mesh.extents))
-    if diag <= 0:
-        return 0.0, None
-    n = int(np.clip(mesh.area / (_SPACING * diag) ** 2, 2000, 200_000))
-    points, faces = trimesh.sample.sample_surface(mesh, n, seed=_SEED)
-    points = np.vstack([points, mesh.triangles_center])
-    faces = np.concatenate([faces, np.arange(len(mesh.faces))])
-    on_hull = np.vstack(
-        [trimesh.sample.sample_surface(hull, 5000, seed=_SEED)[0], hull.triangles_center]
-    )
-    near = faces[cKDTree(points).query(on_hull, k=_NEAR)[1]]  # (m, k) candidate facets
-    P = np.repeat(on_hull, _NEAR, axis=0)
-    Q = trimesh.triangles.closest_point(mesh.triangles[near.ravel()], P)
-    far = float(np.linalg.norm(P - Q, axis=1).reshape(-1, _NEAR).min(axis=1).max()) / diag
-    closed = mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
-    return far, (float(hull.volume / mesh.volume) - 1.0 if closed else None)
 
 
 def link_pieces(
