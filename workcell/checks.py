@@ -23,12 +23,14 @@ MIN_LENGTH = 1e-6  # m: the smallest side, radius or length of a solid or shape
 
 
 def is_finite_number(x: object) -> bool:
-    """True for a finite int or float (numpy scalars too), False for bools and the rest."""
-    return (
-        isinstance(x, (int, float, np.integer, np.floating))
-        and not isinstance(x, (bool, np.bool_))
-        and math.isfinite(float(x))
-    )
+    """True for a finite int or float (numpy scalars too), False for bools and the rest
+    (an integer too large for a float, 10**400, is not a finite number here)."""
+    if not isinstance(x, (int, float, np.integer, np.floating)) or isinstance(x, (bool, np.bool_)):
+        return False
+    try:
+        return math.isfinite(float(x))
+    except OverflowError:
+        return False
 
 
 def check_size(what: str, key: str, v: float) -> None:
@@ -65,7 +67,10 @@ def quote_length(m: object) -> str:
 def shown(v: object) -> str:
     """``repr(v)`` for an error message, cut to 60 characters (a value a user gave may
     be a megabyte long)."""
-    s = repr(v)
+    try:
+        s = repr(v)
+    except ValueError:  # an integer of more than 4300 digits
+        s = f"an integer of {v.bit_length() if isinstance(v, int) else '?'} bits"
     return s if len(s) <= 60 else s[:57] + "..."
 
 

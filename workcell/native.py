@@ -40,6 +40,7 @@ import signal
 import struct
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -48,8 +49,9 @@ from typing import Any
 
 from workcell import errors, limits
 from workcell.errors import LimitError, ModelError, NativeCrashError, WorkcellError
+from workcell.tempfiles import process_alive
 
-__all__ = ["Job", "run"]
+__all__ = ["Job", "die_with_parent", "run"]
 
 _HEADER = struct.Struct("<Q")
 _TAIL = 2000  # characters of the child's stderr kept for an error message
@@ -308,18 +310,37 @@ class _Pool:
 
 
 # ---------------------------------------------------------------------- the child
-def _die_with_parent(parent: int) -> None:
-    with contextlib.suppress(Exception):
-        import ctypes
+def die_with_parent(parent: int) -> None:
+    """End this process when process ``parent`` dies, however it dies (kill -9 included).
 
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    if os.getppid() != parent:  # the parent died before prctl
+    When ``parent`` forked this process, on Linux: the kernel's parent-death signal
+    (``PR_SET_PDEATHSIG``), at once. Otherwise (another OS, or a process started by a fork
+    server for ``parent``): a daemon thread that checks every second whether ``parent``
+    still runs."""
+    if os.getppid() == parent and sys.platform == "linux":
+        armed = False
+        with contextlib.suppress(Exception):
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            armed = libc.prctl(1, signal.SIGKILL) == 0  # PR_SET_PDEATHSIG
+        if os.getppid() != parent:  # the parent died before prctl
+            os._exit(1)
+        if armed:
+            return
+    elif not process_alive(parent):
         os._exit(1)
+
+    def watch() -> None:
+        while process_alive(parent):
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="workcell-parent-watch", daemon=True).start()
 
 
 def _child_main(memory: int, parent: int) -> None:
-    _die_with_parent(parent)
+    die_with_parent(parent)
     import resource
 
     with contextlib.suppress(ValueError, OSError):

@@ -11,8 +11,15 @@ import warnings
 import mujoco
 import numpy as np
 import pytest
-import yourdfpy
-from robot_files import MUJOCO_BLOCK, PYBULLET, REAL_ROBOTS, RTB, random_q, real_robot
+from robot_files import (
+    MUJOCO_BLOCK,
+    PYBULLET,
+    REAL_ROBOTS,
+    RTB,
+    random_q,
+    real_robot,
+    urdf_fk,
+)
 
 from workcell.robots import from_urdf
 
@@ -59,12 +66,5 @@ def test_real_robot_kinematics_match_yourdfpy_and_mujoco(name, folder):
     names = [j.name for j in robot.joints]
     Q = random_q(robot, 30, seed=9)
     ours = robot.fk_batch(Q)  # the tip link (gripper=False: no TCP as the tool)
-    ref = yourdfpy.URDF.load(
-        str(path), load_meshes=False, build_scene_graph=True, load_collision_meshes=False
-    )
-    theirs = []
-    for q in Q:
-        ref.update_cfg(dict(zip(names, q, strict=True)))
-        theirs.append(ref.get_transform(tip, base))
-    np.testing.assert_allclose(ours, np.array(theirs), atol=1e-9)
+    np.testing.assert_allclose(ours, urdf_fk(path, names, Q, tip=tip, base=base), atol=1e-9)
     np.testing.assert_allclose(ours, mujoco_fk(path.read_text(), names, Q, base, tip), atol=1e-9)

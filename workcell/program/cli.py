@@ -111,7 +111,11 @@ def _serve(args: argparse.Namespace) -> int:
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, stop)
-    token = args.token or os.environ.get("WORKCELL_TOKEN") or None
+    from workcell.program.tokens import given_token
+
+    token, warning = given_token(args.token, args.token_file)
+    if warning:
+        print(warning, file=sys.stderr, flush=True)
     make = _start(args)
     make()  # a bad --cell or --mode fails here, not at each client's connection
     server = Server(
@@ -191,12 +195,24 @@ def register(sub: Any) -> None:
         help="serve the remote program interface (JSON lines over TCP; docs/protocol.md)",
         description="Serve programs over TCP (docs/protocol.md; its 'Security' section). "
         "Binds 127.0.0.1 unless --host says otherwise. Clients must send a token: a random "
-        "one, written to a user-only token file that local clients read, unless --token "
-        "(or WORKCELL_TOKEN) gives one. File names in commands stay inside --root.",
+        "one, written to a user-only token file that local clients read, unless "
+        "--token-file FILE or the WORKCELL_TOKEN environment variable gives one (--token "
+        "TOKEN works too, but every user of the machine can read a command line). File "
+        "names in commands stay inside --root.",
     )
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (127.0.0.1)")
     serve.add_argument("--port", type=int, default=5260, help="port (5260; 0: any free port)")
-    serve.add_argument("--token", help="token clients must send (or set WORKCELL_TOKEN)")
+    serve.add_argument(
+        "--token-file",
+        metavar="FILE",
+        help="read the token clients must send from FILE's first line (keep it mode 600); "
+        "or set WORKCELL_TOKEN",
+    )
+    serve.add_argument(
+        "--token",
+        help="the token clients must send; visible to every user in the process list (ps): "
+        "prefer --token-file or WORKCELL_TOKEN",
+    )
     serve.add_argument(
         "--no-token",
         action="store_true",

@@ -180,8 +180,14 @@ def kept_frames(
     if fps is None or n == 0:
         return np.ones(n, dtype=bool)
     keep = np.zeros(n, dtype=bool)
-    samples = times[0] + np.arange(math.floor((times[-1] - times[0]) * fps + 1e-9) + 1) / fps
-    keep[np.minimum(np.searchsorted(times, samples - 1e-9, side="left"), n - 1)] = True
+    count = math.floor((times[-1] - times[0]) * fps + 1e-9) + 1  # samples
+    if count <= n:
+        samples = times[0] + np.arange(count) / fps
+        keep[np.minimum(np.searchsorted(times, samples - 1e-9, side="left"), n - 1)] = True
+    else:  # denser than the frames (fps 1e6: 10^10 samples): which frames they hit, O(n)
+        # frame i is kept when a sample lies in (times[i-1], times[i]] (shifted by 1e-9)
+        below = np.floor((times - times[0] + 1e-9) * fps)  # samples at or before each frame
+        keep[1:] = below[1:] > below[:-1]
     keep[[0, n - 1]] = True
     if must is not None and len(must):
         keep[must] = True

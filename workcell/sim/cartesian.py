@@ -289,8 +289,11 @@ class CartesianCommands:
     ) -> None:
         """Move the tool to the world pose ``T`` (4x4, m): IK, then a joint move.
 
-        ``config``: configuration letters to require (e.g. "ru"); default: the
-        in-limit solution nearest the current joints. ``zone`` (m): blend into the next
+        ``config``: configuration letters to require (e.g. "ru"): the in-limit solution
+        of that configuration nearest the current joints. Default: of the in-limit
+        solutions, nearest first, the first whose joint move keeps the planning clearance
+        (checked as ``plan`` checks: :mod:`workcell.sim.planned`), else the nearest; the
+        move's event says which configuration and why. ``zone`` (m): blend into the next
         move. Raises UnreachableError saying why. With ``plan``, a collision-free joint
         path to the nearest solution that has one (:mod:`workcell.sim.planned`; it stops
         at its end: no zone); PlanningError when the pose is unreachable, every solution
@@ -306,8 +309,9 @@ class CartesianCommands:
             raise UnreachableError(f"move_end_effector '{name}': {exc}") from exc
         if plan:
             self._move_planned(name, sols, "move_end_effector")
-        else:
-            self._move(name, sols[0], "move_end_effector", zone)
+            return
+        pick, why = (0, "") if config is not None else self._default_solution(name, sols)
+        self._move(name, sols[pick], "move_end_effector", zone, note=why)
 
     def move_straight_line(
         self, robot: str, T: ArrayLike, step: float = 0.005, *, max_jump: float = math.radians(10)

@@ -101,8 +101,11 @@ class MotionRunner:
         except JointLimitError as exc:
             raise JointLimitError(f"{command} '{name}': target refused: {exc}") from exc
 
-    def _move(self: Simulator, name: str, target: Array, command: str, zone: float = 0.0) -> None:
-        """A joint move to ``target`` (rad/m), blending out of the robot's pending move."""
+    def _move(
+        self: Simulator, name: str, target: Array, command: str, zone: float = 0.0, note: str = ""
+    ) -> None:
+        """A joint move to ``target`` (rad/m), blending out of the robot's pending move;
+        ``note`` is added to its event (why this target)."""
         placement = self.cell.robots[name]
         self._check_target(name, target, command)
         z = self._zone(command, name, zone)
@@ -114,7 +117,8 @@ class MotionRunner:
             length = float(tool_lengths(placement, motion.rows_of(), q0)[-1])
         if pend is not None and motion.law is not None:
             blend = joint_blend(pend, motion, length, placement, self._limits(name), self.dt)
-        self._commit(name, command, f"to ({deg}) deg", motion, z, blend, pend, length)
+        detail = f"to ({deg}) deg" + (f", {note}" if note else "")
+        self._commit(name, command, detail, motion, z, blend, pend, length)
 
     def _path_move(
         self: Simulator,

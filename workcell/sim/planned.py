@@ -19,6 +19,13 @@ waypoint, so the frames stay on the checked segments. All joints move together i
 mode (joint-by-joint mode would leave the checked segments). Planned moves cannot run
 inside ``concurrently()`` (the other robots' motions are not known to the planner).
 
+Without ``plan`` and without ``config``, ``move_end_effector`` takes, among the in-limit
+IK solutions (nearest to the current joints first), the first whose joint move (straight
+in joint space; in joint-by-joint mode joint 1, then joint 2, ...) keeps the planning
+clearance, checked as planned motions are (:meth:`PlanningCommands._default_solution`:
+its end and its motion, densely); when none does, the nearest, as before. The move's
+event says which configuration and why.
+
 Settings (:class:`~workcell.plan.motion.PlanningOptions`, changed with
 ``sim.set_planning(...)``): ``clearance`` (m, default 5 mm; never below the contact
 tolerance), ``time_limit`` (s per search, default 5) and ``seed`` (default 0): the same
@@ -39,8 +46,9 @@ from numpy.typing import NDArray
 
 from workcell.errors import PlanningError
 from workcell.plan.motion import PlannedPath, PlanningOptions, describe
-from workcell.plan.rrt import plan_path
+from workcell.plan.rrt import plan_path, segment_failure
 from workcell.plan.scene import PlanningScene
+from workcell.robots.ik_closed import config_of
 from workcell.sim.cycle import command_record
 
 __all__ = ["PlanningCommands"]
@@ -145,6 +153,56 @@ class PlanningCommands:
             f"{budget:.3g} s (clearance {sc.clearance * 1e3:.3g} mm); "
             "raise the time limit or lower the clearance (set_planning)"
         )
+
+    def _default_solution(self, name: str, goals: Sequence[Array]) -> tuple[int, str]:
+        """Which of ``goals`` (IK solutions, rad/m, nearest first) a move with no
+        configuration takes, and why, in words (module doc): (index, reason)."""
+        robot = self.cell.robots[name].robot
+        if robot.ik_family is None or len(goals) < 2:
+            return 0, ""
+        letters = [config_of(robot, q) for q in goals]
+        sc = self._planning_scene([name])
+        if sc.start_collision is not None:
+            why = describe(sc.start_collision, sc.clearance)
+            return 0, f"configuration '{letters[0]}', the nearest (start in collision: {why})"
+        first = None
+        for i, q in enumerate(goals):
+            hit = self._joint_move_hit(sc, name, np.asarray(q, dtype=np.float64))
+            if hit is None:
+                if i == 0:
+                    return 0, f"configuration '{letters[0]}', the nearest (its move is clear)"
+                return i, (
+                    f"configuration '{letters[i]}', the nearest whose move is clear "
+                    f"('{letters[0]}' is nearer: {first})"
+                )
+            first = first or hit
+        return 0, (
+            f"configuration '{letters[0]}', the nearest (no solution's move is clear: {first})"
+        )
+
+    def _joint_move_hit(self, sc: PlanningScene, name: str, q: Array) -> str | None:
+        """Why the joint move of ``name`` from its joints now to ``q``, as the simulator's
+        mode runs it, breaks the scene's clearance (a pair and where), or None."""
+        q0 = self.joints(name)
+        ends = [q0, q]
+        if self.mode == "joint-by-joint":  # joint 1 first, then joint 2, ...
+            ends = [q0]
+            for i in np.flatnonzero(q != q0):
+                w = ends[-1].copy()
+                w[i] = q[i]
+                ends.append(w)
+        radii = sc.radii(name)
+        total = float(np.abs(q - q0) @ radii)
+        done = 0.0
+        for a, b in itertools.pairwise(ends):
+            f = segment_failure(sc.valid, a, b, radii, sc.clearance)
+            if f is not None:
+                v = sc.violation({name: a + (b - a) * f})
+                at = (done + f * float(np.abs(b - a) @ radii)) / total if total > 0 else 1.0
+                return f"{describe(v, sc.clearance)} at {at:.0%} of its move"  # type: ignore[arg-type]
+            done += float(np.abs(b - a) @ radii)
+        v = sc.violation({name: q})
+        return None if v is None else f"{describe(v, sc.clearance)} at its end"
 
     def _move_planned(self, name: str, goals: Sequence[Array], command: str) -> None:
         """Plan a path to the first reachable of ``goals`` and run it (module doc)."""

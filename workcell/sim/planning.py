@@ -35,7 +35,15 @@ from workcell.sim import profiles
 from workcell.sim.jerk import Limits, plan_jerk
 from workcell.sim.profiles import step_times
 
-__all__ = ["Motion", "Rows", "frames_of", "law_rows", "plan_move", "plan_waypoints"]
+__all__ = [
+    "Motion",
+    "Rows",
+    "check_frames",
+    "frames_of",
+    "law_rows",
+    "plan_move",
+    "plan_waypoints",
+]
 
 Array = NDArray[np.float64]
 Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, hi)
@@ -66,9 +74,25 @@ class Motion:
 
 def frames_of(duration: float, dt: float, what: str) -> Array:
     """The sample times of a motion of ``duration`` (s) every ``dt`` (s), after checking
-    the work budget (``max_frames_per_command``, naming ``what``) before they are made."""
-    work_limits.check("max_frames_per_command", math.ceil(duration / dt), what)
+    the work budget (``max_frames_per_command``, naming ``what``) before they are made. A
+    duration that overflows (a speed, override or acceleration of 1e-320) is over
+    ``max_sim_time``."""
+    check_frames(duration, dt, 0, what)
     return step_times(duration, dt)  # (which checks again, without the command's name)
+
+
+def check_frames(duration: float, dt: float, extra: int, what: str) -> None:
+    """The work budget of a motion of ``duration`` (s) sampled every ``dt`` (s) plus
+    ``extra`` frames: ``max_frames_per_command``, and ``max_sim_time`` for a duration that
+    overflowed (a speed, override or acceleration of 1e-320). Counted in floats: a count
+    of 1e300 frames is refused, never turned into an integer."""
+    if not math.isfinite(duration):
+        work_limits.check(
+            "max_sim_time",
+            duration,
+            f"{what}: the motion's duration (its speed, override or acceleration is too small)",
+        )
+    work_limits.check("max_frames_per_command", duration / dt + extra, what)
 
 
 def law_rows(law: Any, t: Array, target: Array) -> Rows:
@@ -147,7 +171,7 @@ def plan_move(
     q = q0.copy()
     now = 0.0
     total = sum(shapes[i][0] for i in moving)
-    work_limits.check("max_frames_per_command", math.ceil(total / dt) + len(moving), what)
+    check_frames(total, dt, len(moving), what)
     for i in moving:
         Ti, at, act = shapes[i]
         t = step_times(Ti, dt)
@@ -174,8 +198,9 @@ def plan_waypoints(
     steps = (
         np.abs(np.diff(np.vstack([q0, waypoints]), axis=0)).max(axis=1) if len(waypoints) else []
     )
-    total = float(np.sum(steps)) / speed
-    work_limits.check("max_frames_per_command", math.ceil(total / dt) + len(waypoints), what)
+    with np.errstate(divide="ignore", over="ignore"):
+        total = float(np.sum(steps)) / speed if speed > 0 else math.inf
+    check_frames(total, dt, len(waypoints), what)
     times, rows = [np.empty(0)], [np.empty((0, len(q0)))]
     now, prev = 0.0, q0
     for q in waypoints:
