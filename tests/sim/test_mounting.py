@@ -10,11 +10,15 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "robots"))  # the real-robot registry
+from robot_files import real_robot
 
 from workcell import Workcell, solids, spatial
 from workcell.cli import main
@@ -132,3 +136,23 @@ def test_in_physics_link_1_turns_freely_on_its_mount_and_parts_still_rest_on_it(
     assert s["collisions"] == 0
     assert s["physics"]["parts"]["cube"]["resting"]
     assert s["physics"]["parts"]["cube"]["distance_m"] < 1e-4  # on the table, not through it
+
+
+def test_the_issues_panda_on_a_table_has_no_false_collision_and_picks(tmp_path):
+    path, kw = real_robot("panda", tmp_path)  # rtb-data's Franka (its link 1 reaches down)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        panda = from_urdf(path, **kw)
+    cell = Workcell("panda_table")
+    solids.box(cell.model, "table_block", size=(1.0, 1.0, 0.4))
+    solids.cube(cell.model, "cube_block", size=0.04)
+    cell.add_static("table", "table_block", spatial.translation(-0.5, -0.5, 0.0))
+    cell.add_movable("cube", "cube_block", spatial.translation(0.45, -0.02, 0.4), density=500.0)
+    q0 = np.clip(np.zeros(panda.dof), panda.lower, panda.upper)
+    cell.add_robot("arm", panda, base=spatial.translation(0, 0, 0.4), q=q0)
+    sim = Simulator(cell)
+    assert sim.contacts.mounts == {"arm": ["table"]}
+    assert depths(sim) == {}  # before: "arm.link1 with table: depth 60 mm"
+    sim.pick("arm", "cube")
+    assert [e.kind for e in sim.events].count("grasp") == 1
+    assert not [k for k in depths(sim) if "link1" in k or k.endswith("with table")]
