@@ -23,6 +23,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "workcell.program.cli",
     "workcell.robots.cli",
     "workcell.study.cli",
+    "workcell.program.progcli",
 )
 
 
@@ -260,7 +261,7 @@ def _parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="raise (or lower) a work limit of workcell.limits for this run, e.g. "
         "--limit max_facets=2e6 (limits: max_facets, max_frames_per_command, max_frames, "
-        "max_spill_bytes, max_sim_time, max_file_bytes, max_coordinate)",
+        "max_spill_bytes, max_sim_time, max_file_bytes, max_coordinate, max_program_steps)",
     )
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run a built-in example")

@@ -31,6 +31,8 @@ limit                       default        what it bounds
 ``max_native_seconds``      120 s          wall time of one native geometry job in a child
                                            process (a convex decomposition)
 ``max_native_bytes``        3 GiB          address space of such a child process
+``max_program_steps``       1,000,000      statements one robot program (KRL, RAPID, ...)
+                                           runs (its loops and jumps included)
 ==========================  =============  ==================================================
 
 Raise (or lower) them for a block of code, in this thread only::
@@ -96,6 +98,7 @@ class Limits:
     max_line_chars: int = _limit(65_536, "characters", "one command-language line")
     max_native_seconds: float = _limit(120.0, "s", "one native geometry job (child process)")
     max_native_bytes: int = _limit(3 << 30, "bytes", "a native geometry child's memory")
+    max_program_steps: int = _limit(1_000_000, "steps", "statements a robot program runs")
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):

@@ -23,7 +23,7 @@ from workcell.program.interpreter import run_script
 from workcell.program.server import Server
 
 # a valid value for every other argument of the file commands
-OTHER_ARGS = {"ref": "c", "name": "r", "format": "urdf"}
+OTHER_ARGS = {"ref": "c", "name": "r", "format": "urdf", "robot": "r"}
 
 
 def file_commands() -> dict[str, list[str]]:

@@ -53,6 +53,22 @@ def _run(args: argparse.Namespace) -> int:
     from workcell.program.session import Session
 
     check_outputs(rrd=args.save, png=args.render)
+    if args.camera and not args.render:
+        from workcell.errors import ProgramError
+
+        raise ProgramError("--camera names the view of --render's picture: give --render too")
+    if args.robot_program:  # CELL --robot-program R=FILE: robot programs on a cell
+        from workcell.robotprog.cli import run_robot_programs
+
+        keep: list[Any] = []
+        try:
+            sim = run_robot_programs(args, keep)
+        except WorkcellError:
+            if keep:
+                _outputs(args, keep[0])
+                _collisions(keep[0], args.allow_collisions)
+            raise
+        return _finish(args, sim)
     session = Session(base_dir=Path(args.script).parent)
     try:
         run_script(args.script, session, echo=args.echo)
@@ -60,19 +76,47 @@ def _run(args: argparse.Namespace) -> int:
         if session.sim is not None:  # keep what ran, with the error, in the files asked for
             session.sim._log_error(exc)
             _outputs(args, session.sim)
+            _collisions(session.sim, args.allow_collisions)
+        elif args.save or args.render:
+            print("workcell: nothing recorded or drawn: the script stopped before it started "
+                  "a simulation", file=sys.stderr)  # fmt: skip
         raise
-    _outputs(args, session.sim)
-    if args.cycle_time and session.sim is not None:
+    return _finish(args, session.sim)
+
+
+def _finish(args: argparse.Namespace, sim: Any) -> int:
+    """The outputs, cycle-time table and summary a finished run asks for."""
+    _outputs(args, sim)
+    if args.cycle_time and sim is not None:
         from workcell.sim.cycle import format_table
 
-        print(format_table(session.sim.cycle_time()))
-    if args.summary and session.sim is not None:
+        print(format_table(sim.cycle_time()))
+    if args.summary and sim is not None:
         import json
 
         from workcell.program.protocol import to_jsonable
 
-        print(json.dumps(to_jsonable(session.sim.summary())))
-    return 0
+        print(json.dumps(to_jsonable(sim.summary())))
+    return _collisions(sim, args.allow_collisions)
+
+
+COLLIDED = 3  # the exit status of a run that collided (without --allow-collisions)
+
+
+def _collisions(sim: Any, allowed: bool) -> int:
+    """Say on stderr how many collisions the run had and the first one; the exit status
+    of a run that got to its end: 0, or :data:`COLLIDED` when it collided (not allowed)."""
+    hits = [] if sim is None else [e for e in sim.events if e.kind == "collision"]
+    if not hits:
+        return 0
+    first = hits[0]
+    hint = "" if allowed else " (--allow-collisions: exit status 0 all the same)"
+    print(
+        f"workcell: {len(hits)} collision(s); the first at t = {first.t:.6g} s "
+        f"(frame {first.frame}): {first.detail}{hint}",
+        file=sys.stderr,
+    )
+    return 0 if allowed else COLLIDED
 
 
 def _outputs(args: argparse.Namespace, sim: Any) -> None:
@@ -92,7 +136,7 @@ def _outputs(args: argparse.Namespace, sim: Any) -> None:
     if args.render:
         from workcell.record import contact_sheet
 
-        contact_sheet(sim, args.render)
+        contact_sheet(sim, args.render, camera=args.camera)
         print(f"picture written to {args.render}")
 
 
@@ -170,9 +214,23 @@ def register(sub: Any) -> None:
     run = sub.add_parser(
         "run",
         help="run a command-language script (.wcl)",
-        description="Run a .wcl script; the first error stops it (exit status 2).",
+        description="Run a .wcl script; the first error stops it. Exit status: 0 the script "
+        "ran to its end without a collision; 2 an error stopped it (or the options were "
+        "wrong); 3 it ran to its end but things collided (stderr says how many and the "
+        "first; --allow-collisions: 0); 130 interrupted (Ctrl-C).",
     )
-    run.add_argument("script", metavar="FILE.wcl")
+    run.add_argument(
+        "script",
+        metavar="FILE.wcl|CELL",
+        help="a script; with --robot-program, the cell (CELL.json or an example) to run on",
+    )
+    run.add_argument(
+        "--robot-program",
+        action="append",
+        metavar="ROBOT=FILE",
+        help="run a robot program (.script, .src, .mod, .ls; docs/robot-programs.md) on "
+        "ROBOT of the cell; repeat for several robots (run one after another)",
+    )
     run.add_argument("--echo", action="store_true", help="print each command before its output")
     run.add_argument(
         "--summary", action="store_true", help="print the simulation's summary as JSON at the end"
@@ -188,6 +246,17 @@ def register(sub: Any) -> None:
 
     add_record_fps(run)
     run.add_argument("--render", metavar="FILE.png", help="a contact sheet of the run's key frames")
+    run.add_argument(
+        "--camera",
+        metavar="NAME",
+        help="with --render: a camera of the cell, or a view: overview (the default), "
+        "front, back, left, right, top",
+    )
+    run.add_argument(
+        "--allow-collisions",
+        action="store_true",
+        help="exit 0 even when things collided (they are still reported on stderr)",
+    )
     run.set_defaults(func=_run)
 
     serve = sub.add_parser(

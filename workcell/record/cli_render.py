@@ -40,7 +40,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     render.add_argument("cell", metavar="CELL", help=CELL_HELP)
     render.add_argument("--out", metavar="FILE.png", required=True, help="the PNG to write")
     render.add_argument(
-        "--camera", metavar="NAME", help="a camera of the cell (default: an overview)"
+        "--camera",
+        metavar="NAME",
+        help="a camera of the cell, or a view: overview (the default), front, back, left, "
+        "right, top",
     )
     render.add_argument("--width", type=int, default=640, help="pixels (default 640)")
     render.add_argument("--height", type=int, default=480, help="pixels (default 480)")

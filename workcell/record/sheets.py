@@ -96,6 +96,10 @@ def _font(size: int) -> Any:
 
 
 def _fit(draw: Any, text: str, font: Any, width: float) -> str:
+    """``text``'s first line, cut to ``width`` pixels with an ellipsis (a caption is one
+    line: an error's message may go on with the line it quotes and a caret)."""
+    lines = text.splitlines()
+    text = lines[0] if lines else ""
     if draw.textlength(text, font=font) <= width:
         return text
     while text and draw.textlength(text + "…", font=font) > width:

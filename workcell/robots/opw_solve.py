@@ -31,6 +31,7 @@ __all__ = [
     "ALIGNED_TOL",
     "REACH_TOL",
     "SINGULAR_TOL",
+    "arm_plane",
     "beside_axis1",
     "letters",
     "pose_errors",
@@ -164,19 +165,25 @@ def solve_one(
     return out, maybe_dup, ""
 
 
-def letters(m: OPWModel, theta: Array) -> str:
-    """Configuration letters of the OPW angles theta (6,) rad (module doc of opw)."""
-    _t1, t2, t3, _, t5, _ = (float(t) for t in theta)
-    (L, gamma), s5 = m.forearm, m.signs[4]
+def arm_plane(m: OPWModel, theta: Array) -> tuple[float, float]:
+    """(u, cross): the wrist centre's distance ahead of the shoulder in the arm's plane
+    (m), and (wrist x elbow) there (m^2): the elbow lies on the arm's upper side (the
+    side it has in front of the robot with the elbow up) when cross >= 0."""
+    t2, t3 = float(theta[1]), float(theta[2])
+    L, gamma = m.forearm
     t23 = t2 + t3
     ex, ez = m.c2 * math.sin(t2), m.c2 * math.cos(t2)  # elbow from the shoulder
     u = ex + L * math.sin(t23 + gamma)
     v = ez + L * math.cos(t23 + gamma)
-    x = u + m.a1
-    cross = u * ez - v * ex
-    right = x >= 0.0
+    return u, u * ez - v * ex
+
+
+def letters(m: OPWModel, theta: Array) -> str:
+    """Configuration letters of the OPW angles theta (6,) rad (module doc of opw)."""
+    u, cross = arm_plane(m, theta)
+    right = u + m.a1 >= 0.0
     up = cross >= 0.0 if u >= 0.0 else cross <= 0.0
-    flip = s5 * math.sin(t5) > 0.0
+    flip = m.signs[4] * math.sin(float(theta[4])) > 0.0
     return ("r" if right else "l") + ("u" if up else "d") + ("f" if flip else "n")
 
 

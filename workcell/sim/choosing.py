@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from workcell.errors import GraspError, PlanningError, ProgramError, UnreachableError
 from workcell.plan.choices import BACKOFFS, Failures, Reach
-from workcell.plan.grasps import GraspPose, grasp_poses
+from workcell.plan.grasps import GraspPose, grasp_poses, grip_depths
 from workcell.plan.motion import PlannedPath, describe
 from workcell.plan.scene import PlanningScene
 from workcell.sim.cartesian import line_waypoints, pose_solutions
@@ -61,7 +61,12 @@ class ChoiceHelpers:
         gripper = self.cell.robots[name].robot.gripper
         opening = float(gripper.max_opening) - 2.0 * self.contacts.tolerance
         lo, hi = self._boxes[part]
-        out = grasp_poses(pose, lo, hi, self._centroids[part], opening=opening, backoffs=BACKOFFS)
+        palm, tips = grip_depths(gripper)
+        margin = max(self._planning.near_clearance, self.contacts.tolerance)
+        out = grasp_poses(
+            pose, lo, hi, self._centroids[part], opening=opening, backoffs=BACKOFFS,
+            palm=palm, tips=tips, margin=margin,
+        )  # fmt: skip
         if not out:
             size = " x ".join(f"{v * 1e3:.4g}" for v in hi - lo)
             raise GraspError(
@@ -69,6 +74,14 @@ class ChoiceHelpers:
                 f"{size} mm, every width wider than the {opening * 1e3:.4g} mm opening"
             )
         return out
+
+    def _grip_distance(self, part: str, tool: Array) -> float:
+        """``close_gripper``'s ``max_distance`` (m) for a grasp at ``tool`` chosen by
+        :meth:`_grasps`: its default (20 mm), or more when the grasp backs off further
+        from the centroid (a part much taller than the fingers are long)."""
+        P = self.part_pose(part)
+        c = P[:3, :3] @ self._centroids[part] + P[:3, 3]
+        return max(0.02, float(np.linalg.norm(tool[:3, 3] - c)) + 1e-6)
 
     def _reachable(
         self,

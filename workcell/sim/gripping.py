@@ -150,7 +150,13 @@ class GripperCommands:
                 "grasp",
                 f"grasp '{part}': axis {math.degrees(chosen.angle):.3g} deg, width "
                 f"{chosen.width * 1e3:.4g} mm, distance {chosen.distance * 1e3:.3g} mm",
-                data=command_record(name, "close_gripper", self.sim_time, 0.0),
+                data=command_record(
+                    name,
+                    "close_gripper",
+                    self.sim_time,
+                    0.0,
+                    program={"kind": "gripper", "closed": True},
+                ),
             )
         return part
 
@@ -187,7 +193,10 @@ class GripperCommands:
                         hold.quat,
                     )
                 )
-            rec = command_record(name, "open_gripper", self.sim_time, 0.0)
+            rec = command_record(
+                name, "open_gripper", self.sim_time, 0.0,
+                program={"kind": "gripper", "closed": False},
+            )  # fmt: skip
             if hold is None:
                 self.timeline.add_event(
                     self.sim_time, name, "open", "open_gripper: nothing held", data=rec

@@ -230,7 +230,11 @@ class PlanningCommands:
         how = f"{len(waypoints) - 2} via point(s)"
         if planned is not None:
             how += f", planned in {planned.seconds:.3g} s"
-        record = command_record(name, command, t0, start - t0, activity)
+        program = self._program_settings(
+            name, {"kind": "path", "waypoints": np.asarray(waypoints[1:]).tolist(), "zone": 0.0}
+        )
+        program["q"] = np.asarray(waypoints[-1], dtype=np.float64).tolist()
+        record = command_record(name, command, t0, start - t0, activity, program=program)
         self._run(
             name,
             np.concatenate(times),

@@ -18,6 +18,16 @@ modes (thesis §4.4):
 
 :func:`plan_waypoints` goes through joint waypoints, linearly in joints between them at
 the robot's speed (a straight line's samples, the thesis's timing).
+
+A move in which no joint moves more than :data:`STILL` (1e-12 rad, or m for a prismatic
+joint) is no move: no frames and no time, in every profile. That is a million times
+below an encoder count of any robot here, and above where the jerk profile's own
+arithmetic ends: ruckig takes a move shorter than its position precision as already at
+its target (measured: 5.6e-17 to 5.6e-13 rad over speed limits of 1 mrad/s to 100 rad/s,
+accelerations of 1e-4 to 200 rad/s^2 and jerks of 1e-6 to 1e4 rad/s^3), while the
+minimum time of a jerk-limited move grows as the cube root of its length (a 1.6e-33 rad
+move would "take" 7.1e-12 s). Without one threshold for all, profiles would disagree on
+moves that differ from standing still only in the last bits of a float.
 """
 
 from __future__ import annotations
@@ -36,6 +46,7 @@ from workcell.sim.jerk import Limits, plan_jerk
 from workcell.sim.profiles import step_times
 
 __all__ = [
+    "STILL",
     "Motion",
     "Rows",
     "check_frames",
@@ -46,6 +57,7 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
+STILL = 1e-12  # rad (m): a move whose joints all move at most this far is no move
 Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, hi)
 
 
@@ -124,11 +136,11 @@ def plan_move(
 ) -> Motion:
     """One move from ``q0`` to ``target`` (module doc) at ``speed`` (rad/s, the joint that
     moves most; thesis profiles) or within ``limits`` (profile "jerk"), sampled every
-    ``dt`` (s). No motion gives no frames; more than the work budget's frames per
-    command raise LimitError naming ``what``."""
+    ``dt`` (s). No motion (no joint moving more than :data:`STILL`) gives no frames;
+    more than the work budget's frames per command raise LimitError naming ``what``."""
     delta = target - q0
     big = float(np.max(np.abs(delta))) if len(delta) else 0.0
-    if big == 0.0:
+    if big <= STILL:
         return Motion(np.empty(0), np.empty((0, len(q0))))
     jerk = profile == "jerk"
     if not joint_by_joint:  # path and playback: eq. 4.27, 4.28

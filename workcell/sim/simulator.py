@@ -302,7 +302,8 @@ class Simulator(
                 self.timeline.append(self.sim_time + s, self._wall, self.data.qpos)
                 self.sim_time += s
                 self._wall += time.perf_counter() - c0
-            rec = command_record(None, "wait", self.sim_time - s, s, "wait")
+            asked = {"kind": "wait", "seconds": s}
+            rec = command_record(None, "wait", self.sim_time - s, s, "wait", program=asked)
             self.timeline.add_event(self.sim_time, None, "wait", f"wait {s:.6g} s", data=rec)
 
     def _log_error(self, exc: BaseException, robot: str | None = None) -> None:

@@ -84,7 +84,7 @@ class TaskCommands(ChoiceHelpers):
             with self._transaction():
                 self._run_waypoints(name, planned.waypoints, "pick", planned)
                 self.move_straight_line(name, reach.tool)
-                got = self.close_gripper(name)
+                got = self.close_gripper(name, self._grip_distance(part, reach.tool))
                 if got != part:
                     raise GraspError(f"pick '{name}': grasped '{got}' instead of '{part}'")
                 self.move_straight_line(name, reach.above)
@@ -173,7 +173,7 @@ class TaskCommands(ChoiceHelpers):
             planned = self._plan_joint_path(r, [reach.q_above], "handover")
             self._run_waypoints(r, planned.waypoints, "handover", planned)
             self.move_straight_line(r, reach.tool)
-            if self.close_gripper(r) != part:
+            if self.close_gripper(r, self._grip_distance(part, reach.tool)) != part:
                 raise GraspError(f"handover '{r}': did not grasp '{part}'")
             self.open_gripper(g)
             self.move_straight_line(g, approach_pose(self.tool_pose(g), approach))
