@@ -29,6 +29,7 @@ bench: $(STAMP)
 	$(BIN)/python scripts/bench_motion.py
 	$(BIN)/python scripts/bench_plan.py
 	$(BIN)/python scripts/bench_logic.py
+	$(BIN)/python scripts/bench_import.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -91,7 +91,7 @@ def test_unwritable_cache_warns_and_still_decomposes(monkeypatch, tmp_path):
     monkeypatch.setenv(dec.CACHE_ENV, str(blocker / "sub"))
     pieces = [trimesh.creation.box(extents=(1, 1, 1)), trimesh.creation.icosphere()]
     arrays = [(p.vertices, p.faces) for p in pieces]
-    monkeypatch.setattr("workcell.native.run", lambda jobs, **kw: [arrays])  # not CoACD's part
+    monkeypatch.setattr("workcell.native.run", lambda jobs, **kw: [("coacd", arrays)])  # not CoACD
     mesh = bin_model().world_mesh(("block", "bin"))
     with pytest.warns(UserWarning, match="cannot write the convex decomposition cache"):
         got = dec.decompose(mesh, 0.05)

@@ -105,6 +105,39 @@ def test_a_runaway_job_stops_at_the_time_limit():
     assert children_of(os.getpid()) == []
 
 
+def test_a_job_over_its_own_bound_gives_the_callers_value_and_the_others_go_on():
+    ring, box = torus(80_000), trimesh.creation.box(extents=(0.3, 0.2, 0.1))
+    jobs = [
+        native.Job("workcell.decompose:coacd_pieces", (m.vertices, m.faces, 0.05), label)
+        for m, label in ((ring, "torus"), (box, "box"))
+    ]
+    done, late = [], []
+
+    def over(i, label, seconds):
+        late.append((i, label, seconds))
+        return "too late"
+
+    t0 = time.monotonic()
+    got = native.run(
+        jobs, workers=1, seconds=5.0, on_timeout=over, on_done=lambda *a: done.append(a[:2])
+    )
+    assert got[0] == "too late"
+    assert late[0][:2] == (0, "torus")
+    assert late[0][2] >= 5.0
+    assert trimesh.Trimesh(*got[1][0]).volume == pytest.approx(0.006, rel=1e-4)  # a fresh child
+    assert sorted(done) == [(0, "torus"), (1, "box")]
+    assert time.monotonic() - t0 < 40
+    assert children_of(os.getpid()) == []
+    with pytest.raises(LimitError, match=r"torus: .* s is over the 1 s it may take"):
+        native.run(jobs[:1], seconds=1.0)  # no on_timeout: an error, as for the limit
+    assert children_of(os.getpid()) == []
+    # a bound in CPU seconds: the child's own time (whatever else the machine runs)
+    late.clear()
+    assert native.run(jobs[:1], seconds=1.0, on_timeout=over, cpu=True) == ["too late"]
+    assert late[0][2] >= 1.0  # wall seconds: at least the CPU seconds of one thread
+    assert children_of(os.getpid()) == []
+
+
 def test_out_of_memory_in_the_child_is_a_model_error():
     with (
         limits.using(max_native_bytes=400 << 20, max_native_seconds=60),

@@ -57,7 +57,8 @@ READERS = {  # name of the special file, reader, error class
     "cell": ("c.json", Workcell.load, ModelError),
     "script": ("s.wcl", run_script, WorkcellError),
     "mesh": ("m.stl", load_mesh, ModelError),
-    "urdf mesh": ("m.stl", lambda p: from_urdf(_urdf(p.parent, p.name)), ModelError),
+    # strict: a mesh found nowhere is an error (else a warning and a stand-in)
+    "urdf mesh": ("m.stl", lambda p: from_urdf(_urdf(p.parent, p.name), strict=True), ModelError),
     "urdf": ("r.urdf", from_urdf, ModelError),
     "study program": ("p.wcl", _study_program, StudyError),
 }

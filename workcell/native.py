@@ -17,7 +17,10 @@ result comes back the same way. The child
 
 A child that dies (a signal, an abort, out of memory) gives a
 :class:`~workcell.errors.NativeCrashError`, a :class:`~workcell.errors.ModelError` naming the job's label and what the child said last;
-a job over its time a :class:`~workcell.errors.LimitError`; a
+a job over its time (``max_native_seconds``, or the caller's own shorter bound
+``seconds``) a :class:`~workcell.errors.LimitError`, unless the caller says what such a
+job gives instead (``on_timeout``): then that job's child is killed, a fresh one takes the
+next job, and the others go on; a
 :class:`~workcell.errors.WorkcellError` raised in the child is raised here as the same
 class. Several jobs run on ``workers`` children at once; ``on_done(i, label, seconds)``
 is called in the parent as each one finishes (for progress bars). A child costs about
@@ -45,13 +48,15 @@ from pathlib import Path
 from typing import Any
 
 from workcell import errors, limits
-from workcell.errors import ModelError, NativeCrashError, WorkcellError
+from workcell.errors import LimitError, ModelError, NativeCrashError, WorkcellError
 from workcell.tempfiles import process_alive
 
 __all__ = ["Job", "die_with_parent", "run"]
 
 _HEADER = struct.Struct("<Q")
 _TAIL = 2000  # characters of the child's stderr kept for an error message
+_CPU_POLL = 0.1  # s between looks at the children's CPU time (a bound in CPU seconds)
+_TICKS = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
 _THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _PACKAGE = __name__.split(".")[0] + "."  # "workcell.": only its functions run in children
 _PACKAGE_ROOT = str(Path(__file__).resolve().parent.parent)
@@ -73,12 +78,20 @@ def run(
     *,
     workers: int | None = None,
     on_done: Callable[[int, str, float], None] | None = None,
+    seconds: float | None = None,
+    on_timeout: Callable[[int, str, float], Any] | None = None,
+    cpu: bool = False,
 ) -> list[Any]:
     """Run ``jobs`` in child processes; their results in order (module doc).
 
-    ``workers``: children at once (default: the cores, at most the jobs). Raises
-    NativeCrashError, LimitError (a job over ``max_native_seconds``) or the child's
-    WorkcellError; every child is gone when this returns or raises, Ctrl-C included.
+    ``workers``: children at once (default: the cores, at most the jobs). ``seconds``:
+    the wall time each job may take (s; at most, and by default, ``max_native_seconds``).
+    ``on_timeout(i, label, seconds)``: the result of job i when it runs over that time
+    (its child is killed; ``on_done`` is called for it too); None: a job over its time is
+    a LimitError. ``cpu``: ``seconds`` counts the child's CPU seconds (user + system, as
+    Linux's /proc tells; wall time where it cannot be read), so the bound does not depend
+    on what else the machine runs; ``max_native_seconds`` still bounds the wall time. Raises NativeCrashError, LimitError or the child's WorkcellError;
+    every child is gone when this returns or raises, Ctrl-C included.
     """
     for job in jobs:
         if not job.function.startswith(_PACKAGE) or ":" not in job.function:
@@ -87,7 +100,11 @@ def run(
         return []
     lim = limits.current()
     n = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
-    pool = _Pool(n, int(lim.max_native_bytes), float(lim.max_native_seconds))
+    limit = float(lim.max_native_seconds)
+    own = seconds is not None and float(seconds) < limit
+    pool = _Pool(n, int(lim.max_native_bytes), float(seconds) if own and not cpu else limit)
+    pool.own, pool.on_timeout = own, on_timeout
+    pool.cpu = float(seconds) if own and cpu else None
     try:
         return pool.run(list(jobs), on_done)
     finally:
@@ -112,13 +129,30 @@ class _Child:
         self.inbox = b""
         self.tail = ""
         self.job: int | None = None
-        self.started = 0.0
+        self.started = self.cpu0 = 0.0
         for f in (self.proc.stdout, self.proc.stderr):
             os.set_blocking(f.fileno(), False)
+
+    def cpu(self) -> float | None:
+        """The child's CPU seconds so far (user + system); None where /proc cannot tell."""
+        try:
+            stat = Path(f"/proc/{self.proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+            return (int(stat[11]) + int(stat[12])) / _TICKS
+        except (OSError, IndexError, ValueError):
+            return None
+
+    def used(self, cpu: bool, now: float) -> float:
+        """Seconds the current job has taken: CPU seconds (``cpu``, when known) or wall."""
+        if cpu:
+            c = self.cpu()
+            if c is not None:
+                return c - self.cpu0
+        return now - self.started
 
     def send(self, index: int, job: Job) -> None:
         data = pickle.dumps((job.function, job.args), protocol=pickle.HIGHEST_PROTOCOL)
         self.job, self.started = index, time.monotonic()
+        self.cpu0 = self.cpu() or 0.0
         try:
             self.proc.stdin.write(_HEADER.pack(len(data)) + data)
             self.proc.stdin.flush()
@@ -148,13 +182,29 @@ class _Child:
 class _Pool:
     def __init__(self, n: int, memory: int, seconds: float) -> None:
         self.memory, self.seconds = memory, seconds
+        self.own = False  # seconds is the caller's bound, not max_native_seconds
+        self.cpu: float | None = None  # the caller's bound in CPU seconds (seconds: wall)
+        self.on_timeout: Callable[[int, str, float], Any] | None = None
         self.children: list[_Child] = []
         self.sel = selectors.DefaultSelector()
         for _ in range(n):
-            child = _Child(memory)
-            self.children.append(child)
-            self.sel.register(child.proc.stdout, selectors.EVENT_READ, (child, "out"))
-            self.sel.register(child.proc.stderr, selectors.EVENT_READ, (child, "err"))
+            self._start()
+
+    def _start(self) -> _Child:
+        child = _Child(self.memory)
+        self.children.append(child)
+        self.sel.register(child.proc.stdout, selectors.EVENT_READ, (child, "out"))
+        self.sel.register(child.proc.stderr, selectors.EVENT_READ, (child, "err"))
+        return child
+
+    def _replace(self, child: _Child) -> _Child:
+        """Kill ``child`` (a job over its time) and start a fresh one in its place."""
+        for f in (child.proc.stdout, child.proc.stderr):
+            with contextlib.suppress(KeyError, ValueError):
+                self.sel.unregister(f)
+        child.kill()
+        self.children.remove(child)
+        return self._start()
 
     def run(self, jobs: list[Job], on_done: Callable[[int, str, float], None] | None) -> list:
         results: list[Any] = [None] * len(jobs)
@@ -165,12 +215,36 @@ class _Pool:
             if i is not None:
                 child.send(i, jobs[i])
         while left:
-            busy = [c for c in self.children if c.job is not None]
             now = time.monotonic()
-            wait = min(c.started + self.seconds for c in busy) - now
-            for c in busy:
-                if now - c.started > self.seconds:
-                    raise limits.exceeded("max_native_seconds", now - c.started, jobs[c.job].label)
+            for c in [c for c in self.children if c.job is not None]:
+                cpu = c.used(True, now) if self.cpu is not None else 0.0
+                over_cpu = self.cpu is not None and cpu > self.cpu
+                if now - c.started <= self.seconds and not over_cpu:
+                    continue
+                i = c.job
+                if self.on_timeout is None:
+                    if self.own:
+                        took, bound = (
+                            (cpu, self.cpu) if over_cpu else (now - c.started, self.seconds)
+                        )
+                        raise LimitError(
+                            f"{jobs[i].label}: {took:.3g} s is over the {bound:.3g} s it may take"
+                        )
+                    raise limits.exceeded("max_native_seconds", now - c.started, jobs[i].label)
+                results[i] = self.on_timeout(i, jobs[i].label, now - c.started)
+                left -= 1
+                if on_done is not None:
+                    on_done(i, jobs[i].label, now - c.started)
+                fresh = self._replace(c)
+                nxt = next(todo, None)
+                if nxt is not None:
+                    fresh.send(nxt, jobs[nxt])
+            busy = [c for c in self.children if c.job is not None]
+            if not busy:
+                continue
+            wait = min(c.started + self.seconds for c in busy) - time.monotonic()
+            if self.cpu is not None:
+                wait = min(wait, _CPU_POLL)  # CPU time is looked at, not waited for
             for key, _ in self.sel.select(timeout=max(wait, 0.0)):
                 child, which = key.data
                 chunk = os.read(key.fd, 1 << 20)

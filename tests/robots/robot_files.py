@@ -1,7 +1,10 @@
 """Robot files the tests write: URDF and MJCF arms with meshes, primitives, branches.
 
 Nothing third-party: every file is generated here (meshes by trimesh), except the real
-ROS-Industrial files that the test-only ``rtb-data`` package ships (:data:`RTB`).
+ROS-Industrial files that the test-only ``rtb-data`` package ships (:data:`RTB`) and
+pybullet's arms in the test-only ``pybullet`` package (:data:`PYBULLET`):
+:data:`REAL_ROBOTS` names each arm there, :func:`real_robot` gives its URDF (compiling a
+xacro with xacrodoc) and the ``from_urdf`` arguments that find its meshes.
 """
 
 from __future__ import annotations
@@ -17,6 +20,76 @@ try:
     RTB: Path | None = Path(rtbdata.__path__[0]) / "xacro"
 except ImportError:  # pragma: no cover - rtb-data is a test dependency
     RTB = None
+try:
+    import pybullet_data
+
+    PYBULLET: Path | None = Path(pybullet_data.getDataPath())
+except ImportError:  # pragma: no cover - pybullet is a test dependency
+    PYBULLET = None
+
+_KUKA = "kuka_description"
+# name -> (where: "rtb" or "pybullet", the URDF or xacro file, its package folder)
+REAL_ROBOTS: dict[str, tuple[str, str, str]] = {
+    "kr3r540": ("rtb", f"{_KUKA}/kuka_kr3/urdf/kr3r540.xacro", f"{_KUKA}/kuka_kr3"),
+    "kr5_arc": ("rtb", f"{_KUKA}/kuka_kr5/urdf/kr5_arc.xacro", f"{_KUKA}/kuka_kr5"),
+    "kr6r700sixx": ("rtb", f"{_KUKA}/kuka_kr6/urdf/kr6r700sixx.xacro", f"{_KUKA}/kuka_kr6"),
+    "kr6r900sixx": ("rtb", f"{_KUKA}/kuka_kr6/urdf/kr6r900sixx.xacro", f"{_KUKA}/kuka_kr6"),
+    "kr10r1100sixx": ("rtb", f"{_KUKA}/kuka_kr10/urdf/kr10r1100sixx.xacro", f"{_KUKA}/kuka_kr10"),
+    "kr16_2": ("rtb", f"{_KUKA}/kuka_kr16/urdf/kr16_2.urdf", f"{_KUKA}/kuka_kr16"),
+    "kr120r2500pro": ("rtb", f"{_KUKA}/kuka_kr120/urdf/kr120r2500pro.urdf", f"{_KUKA}/kuka_kr120"),
+    "kr150_2": ("rtb", f"{_KUKA}/kuka_kr150/urdf/kr150_2.xacro", f"{_KUKA}/kuka_kr150"),
+    "kr210l150": ("rtb", f"{_KUKA}/kuka_kr210/urdf/kr210l150.urdf", f"{_KUKA}/kuka_kr210"),
+    "lbr_iiwa_14_r820": (
+        "rtb", f"{_KUKA}/kuka_lbr_iiwa/urdf/lbr_iiwa_14_r820.urdf", f"{_KUKA}/kuka_lbr_iiwa"
+    ),
+    "irb140": ("rtb", "abb_irb140_description/urdf/irb140.urdf", "abb_irb140_description"),
+    "puma560": (
+        "rtb",
+        "unimation_puma560_description/urdf/puma560_robot.urdf.xacro",
+        "unimation_puma560_description",
+    ),
+    "al5d": (
+        "rtb", "lynxmotion_al5d_description/urdf/al5d_robot.urdf", "lynxmotion_al5d_description"
+    ),
+    "panda": (
+        "rtb", "qut_frankie_description/robots/panda_arm_hand.urdf.xacro", "qut_frankie_description"
+    ),
+    **{
+        t: ("rtb", f"trossen_descriptions/urdf/{t}.urdf.xacro", "trossen_descriptions")
+        for t in ("px100", "px150", "rx150", "rx200", "wx200", "wx250", "wx250s", "vx250",
+                  "vx300", "vx300s")
+    },
+    "pybullet_iiwa": ("pybullet", "kuka_iiwa/model.urdf", "kuka_iiwa"),
+    "pybullet_panda": ("pybullet", "franka_panda/panda.urdf", "franka_panda"),
+}  # fmt: skip
+
+
+def real_robot(name: str, folder: Path) -> tuple[Path, dict]:
+    """The URDF of :data:`REAL_ROBOTS` ``name`` (a xacro is compiled into ``folder``) and
+    the ``from_urdf`` keywords that find its meshes (its package folder to search)."""
+    where, rel, pkg = REAL_ROBOTS[name]
+    base = RTB if where == "rtb" else PYBULLET
+    if base is None:  # pragma: no cover - test dependencies
+        raise FileNotFoundError(f"the {where} package is not installed")
+    path = base / rel
+    if path.suffix == ".xacro":
+        from xacrodoc import XacroDoc, packages
+
+        kuka = base / _KUKA
+        packages.update_package_cache(
+            {
+                **{f"kuka_{k}_support": str(kuka / f"kuka_{k}") for k in
+                   ("kr3", "kr5", "kr6", "kr10", "kr16", "kr120", "kr150", "kr210")},
+                "kuka_resources": str(kuka / "kuka_resources"),
+                "qut_frankie_description": str(base / "qut_frankie_description"),
+            }
+        )  # fmt: skip
+        text = XacroDoc.from_file(path, resolve_packages=False).to_urdf_string()
+        folder.mkdir(parents=True, exist_ok=True)
+        path = folder / f"{name}.urdf"
+        path.write_text(text)
+    return path, {"search": [base / pkg]}
+
 
 RTB_FILES = {
     "kr16": "kuka_description/kuka_kr16/urdf/kr16_2.urdf",
@@ -215,6 +288,98 @@ def arm_mjcf(*, mesh: str = "meshes/arm.stl", extra_body: str = "", gripper: boo
   </keyframe>
 </mujoco>
 """
+
+
+def menagerie_like(folder: Path, *, assets: bool = True) -> Path:
+    """A MuJoCo Menagerie-like arm (written here, laid out as Menagerie's are): ``arm.xml``
+    with ``<compiler meshdir="assets">``, visual and collision default classes, meshes
+    named by their files only or by name, explicit inertials, a keyframe and a parallel
+    hand; ``scene.xml`` includes it and adds a floor. ``assets`` False leaves the mesh
+    folder out (as a copy without ``assets/``). Returns scene.xml's path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    if assets:
+        (folder / "assets").mkdir(exist_ok=True)
+        trimesh.creation.box(extents=(0.2, 0.2, 0.1)).export(folder / "assets/base.stl")
+        trimesh.creation.cylinder(radius=0.05, height=0.3, sections=16).export(
+            folder / "assets/link1.stl"
+        )
+        trimesh.creation.box(extents=(0.06, 0.06, 0.35)).export(folder / "assets/upper.obj")
+        trimesh.creation.box(extents=(0.05, 0.05, 0.3)).export(folder / "assets/fore.stl")
+    (folder / "arm.xml").write_text(
+        """<mujoco model="menagerie_like">
+  <compiler angle="radian" meshdir="assets" autolimits="true"/>
+  <default>
+    <default class="arm">
+      <joint axis="0 0 1" range="-2.9 2.9"/>
+      <default class="visual"><geom type="mesh" contype="0" conaffinity="0" group="2"/></default>
+      <default class="collision"><geom type="mesh" group="3"/></default>
+      <default class="finger"><joint type="slide" axis="0 1 0" range="0 0.04"/></default>
+    </default>
+  </default>
+  <asset>
+    <material name="white" rgba="1 1 1 1"/>
+    <mesh file="base.stl"/>
+    <mesh name="link1_c" file="link1.stl"/>
+    <mesh file="upper.obj" scale="1 1 1"/>
+    <mesh name="fore" file="fore.stl"/>
+  </asset>
+  <worldbody>
+    <body name="link0" childclass="arm">
+      <inertial mass="4" pos="0 0 0.05" diaginertia="0.02 0.02 0.02"/>
+      <geom mesh="base" class="visual" material="white"/>
+      <geom mesh="base" class="collision"/>
+      <body name="link1" pos="0 0 0.333">
+        <inertial mass="5" pos="0 0 -0.05" diaginertia="0.05 0.05 0.0125"/>
+        <joint name="joint1"/>
+        <geom mesh="link1_c" class="collision"/>
+        <geom mesh="link1_c" class="visual"/>
+        <body name="link2" quat="1 -1 0 0">
+          <inertial mass="3" pos="0 -0.15 0" diaginertia="0.03 0.006 0.03"/>
+          <joint name="joint2" range="-1.76 1.76"/>
+          <geom mesh="upper" class="visual"/>
+          <body name="link3" pos="0 -0.316 0" quat="1 1 0 0">
+            <inertial mass="2" pos="0.04 0 -0.1" diaginertia="0.02 0.02 0.004"/>
+            <joint name="joint3"/>
+            <geom mesh="fore" class="collision"/>
+            <body name="link4" pos="0.0825 0 0" quat="1 1 0 0">
+              <inertial mass="1" pos="0 0.05 0" diaginertia="0.005 0.002 0.005"/>
+              <joint name="joint4" range="-3.07 -0.07"/>
+              <geom type="capsule" fromto="0 0 0 0 0.1 0" size="0.03" class="visual"/>
+              <body name="hand" pos="0 0.1 0" quat="1 -1 0 0">
+                <inertial mass="0.5" pos="0 0 0.03" diaginertia="0.001 0.001 0.001"/>
+                <geom type="box" size="0.02 0.08 0.02" class="visual"/>
+                <body name="left_finger" pos="0 0 0.058">
+                  <inertial mass="0.02" pos="0 0 0.02" diaginertia="1e-5 1e-5 1e-5"/>
+                  <joint name="finger1" class="finger"/>
+                  <geom type="box" size="0.01 0.005 0.02" pos="0 0.005 0.02" class="visual"/>
+                </body>
+                <body name="right_finger" pos="0 0 0.058" quat="0 0 0 1">
+                  <inertial mass="0.02" pos="0 0 0.02" diaginertia="1e-5 1e-5 1e-5"/>
+                  <joint name="finger2" class="finger"/>
+                  <geom type="box" size="0.01 0.005 0.02" pos="0 0.005 0.02" class="visual"/>
+                </body>
+              </body>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <keyframe>
+    <key name="home" qpos="0 0.3 0 -1.5 0.04 0.04"/>
+  </keyframe>
+</mujoco>
+"""
+    )
+    scene = folder / "scene.xml"
+    scene.write_text(
+        """<mujoco model="scene">
+  <include file="arm.xml"/>
+  <worldbody><geom name="floor" type="plane" size="1 1 0.05"/></worldbody>
+</mujoco>
+"""
+    )
+    return scene
 
 
 def urdf_fk(path, joint_names, Q, tip="tool0", base="base_link") -> np.ndarray:

@@ -202,14 +202,14 @@ def test_a_missing_visual_falls_back_to_the_collision_mesh(tmp_path):
     assert sphere  # the collision sphere is drawn instead
 
 
-def test_a_missing_collision_mesh_lists_every_place_tried(tmp_path):
+def test_a_missing_collision_mesh_lists_every_place_tried_when_strict(tmp_path):
     text = arm_urdf().replace('<sphere radius="0.05"/>', '<mesh filename="package://x/c.stl"/>')
     f = write(tmp_path / "robot" / "urdf", "arm.urdf", text)
     write_meshes(f.parent)
-    with pytest.raises(ModelError, match="link 'link2'") as err:
-        quiet(f, packages={"x": tmp_path / "px"}, search=[tmp_path / "s1"])
+    with pytest.raises(ModelError, match=r"link 'link2'.*'package://x/c\.stl'") as err:
+        quiet(f, packages={"x": tmp_path / "px"}, search=[tmp_path / "s1"], strict=True)
     msg = str(err.value)
-    for place in ("px/c.stl", "s1/c.stl", "urdf/c.stl", "robot/c.stl"):
+    for place in ("px/c.stl", "s1/c.stl", "urdf/c.stl", "robot/c.stl", "robot/x/c.stl"):
         assert place in msg
 
 

@@ -181,8 +181,10 @@ def _file_robot(f: Mapping[str, Any], base_dir: Path | None, root: Path | None) 
             "gripper",
             "geometry",
             "concavity",
+            "link_seconds",
+            "strict",
         },
-        "mjcf": {"base_body", "tip_body", "tool_site", "name", "gripper", "geometry"},
+        "mjcf": {"base_body", "tip_body", "tool_site", "name", "gripper", "geometry", "strict"},
     }[fmt]
     bad = sorted(set(opts) - allowed)
     if bad:

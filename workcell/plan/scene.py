@@ -10,7 +10,8 @@ collision pieces, with geom margins of ``clearance / 2`` so pairs closer than th
 clearance are listed), except:
 
 - pairs the simulator never checks (a held part and the gripper holding it, links up to
-  two apart, parent and child bodies) and (gripper, part) pairs the caller names
+  two apart, parent and child bodies, a mounted robot's link 1 and what its base stands
+  on: :meth:`workcell.sim.contacts.ContactMonitor.mount`) and (gripper, part) pairs the caller names
   (``grips``: a gripper about to grasp a part may straddle it closely);
 - pairs already closer than the clearance in the scene's start state (*touching*: a part
   resting on its support, a gripper around the part it has just released): these may stay
@@ -134,6 +135,9 @@ class PlanningScene:
         m.body_margin[:] = self.clearance / 2.0
         self._moving = moving
         self._touching = np.zeros(self._nlabel * self._nlabel, dtype=bool)  # by label key
+        self._allowed = np.zeros_like(self._touching)  # pairs never checked, by label key
+        for a, b in sim.contacts.allowed:
+            self._allowed[self._label_key(a, b)] = True
         self.start_collision: Violation | None = None
         self._start()
         for a, b in touching:
@@ -216,6 +220,8 @@ class PlanningScene:
         worst = None
         for key, dist, g1, g2 in pairs:
             self._touching[key] = True
+            if self._allowed[key]:
+                continue
             if dist < -self.tolerance and (worst is None or dist < worst[2]):
                 worst = (self._labels[g1], self._labels[g2], dist)
         self.start_collision = worst
@@ -265,7 +271,8 @@ class PlanningScene:
         con = self.data.contact
         g1, g2 = con.geom1[:n], con.geom2[:n]
         key = self._keys(g1, g2)
-        return bool((self._touching[key] & (con.dist[:n] >= -self.tolerance)).all())
+        ok = self._touching[key] & (con.dist[:n] >= -self.tolerance)
+        return bool((ok | self._allowed[key]).all())
 
     def valid(self, q: Array, robot: str | None = None) -> bool:
         """Whether ``robot`` (default: the first planned robot) at ``q`` keeps the clearance."""
@@ -284,7 +291,7 @@ class PlanningScene:
         mujoco.mj_collision(self.model, self.data)
         worst = None
         for key, dist, g1, g2 in self._pairs(self.data.ncon):
-            if self._touching[key] and dist >= -self.tolerance:
+            if self._allowed[key] or (self._touching[key] and dist >= -self.tolerance):
                 continue
             if worst is None or dist < worst[2]:
                 worst = (self._labels[g1], self._labels[g2], dist)

@@ -192,13 +192,17 @@ def collision_info(cell: Any, entity: tuple[str, str], concavity: float) -> dict
 
 
 def cell_info(cell: Any, *, concavity: float | None = None) -> dict[str, Any]:
-    """The cell as JSON-able data: robots (limits in deg or m), parts (with their collision
-    pieces, non-convex ones decomposed within ``concavity``), cameras, reachability."""
+    """The cell as JSON-able data: robots (limits in deg or m, what each stands on:
+    :func:`workcell.sim.contacts.mounts_of`), parts (with their collision pieces,
+    non-convex ones decomposed within ``concavity``), cameras, reachability."""
     import numpy as np
 
+    from workcell.cell import compile_cell
     from workcell.decompose import DEFAULT_CONCAVITY
+    from workcell.sim.contacts import mounts_of
 
     concavity = DEFAULT_CONCAVITY if concavity is None else concavity
+    mounts = mounts_of(compile_cell(cell, concavity=concavity)) if cell.robots else {}
 
     robots = []
     for r in cell.robots.values():
@@ -222,6 +226,7 @@ def cell_info(cell: Any, *, concavity: float | None = None) -> dict[str, Any]:
                 "gripper": r.robot.gripper is not None,
                 "base_position_m": _r(r.base[:3, 3]),
                 "tool_position_m": _r(r.tool_pose()[:3, 3]),
+                "stands_on": mounts.get(r.name, []),
                 "joints": joints,
             }
         )
@@ -302,6 +307,9 @@ def format_info(info: dict[str, Any]) -> str:
             f"  {r['name']}: {r['model']}{grip}, base at {_xyz(r['base_position_m'])} m, "
             f"tool at {_xyz(r['tool_position_m'])} m"
         )
+        if r["stands_on"]:
+            on = ", ".join(f"'{x}'" for x in r["stands_on"])
+            out.append(f"    stands on {on}: its link 1 may touch it (allowed contact)")
         out.append(f"    {'joint':10s} {'lower':>9s} {'upper':>9s} {'initial':>9s}")
         for j in r["joints"]:
             out.append(

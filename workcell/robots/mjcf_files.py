@@ -25,6 +25,12 @@ loading trees of look-alike files; ``tests/robots/test_mjcf_files.py`` keeps the
   ``:/`` or ``:\\``, is absolute; ``.`` and ``..`` are reduced on the text (not through
   symbolic links), then the file system resolves the rest.
 
+An asset without a name keeps the one MuJoCo gives it (its file's name without folder
+and extension: geoms use it) when its file name is replaced. A mesh or texture file
+found nowhere is, with ``missing``, listed there and left unread for
+:mod:`workcell.robots.mjcf_missing` (a name leading outside ``root`` is refused all the
+same); ``wanted=False`` reads none (only the kinematics are wanted).
+
 With ``root``: names and folders may not be absolute or hold ``~`` or ``..``; every
 file must resolve inside ``root`` (symbolic links followed) and have one hard link;
 refusals never tell whether a file outside the root exists. Skins, flex components and
@@ -48,9 +54,11 @@ from typing import Any
 import mujoco
 
 from workcell import limits
+from workcell.confine import leaves_root
 from workcell.errors import ModelError
 from workcell.files import read_bytes
 from workcell.robots.meshfile import count_facets, parse_xml
+from workcell.robots.standin import Missing
 
 __all__ = ["MjcfFiles", "read_mjcf", "spec_from_files"]
 
@@ -58,6 +66,10 @@ _CUBE = ("fileright", "fileleft", "fileup", "filedown", "filefront", "fileback")
 _DIRS = ("assetdir", "meshdir", "texturedir")
 _FOLDER = {"mesh": "meshdir", "hfield": "meshdir", "texture": "texturedir"}
 _NOT_READ = ("skin", "flexcomp", "model")
+_STAND_IN = {  # files that may be missing, and what stands in (robots.mjcf_missing)
+    "mesh": "a capsule between its body's joints stands in",
+    "texture": "a plain grey texture stands in",
+}
 _MAX_INCLUDES = 1000  # include elements in one model (each file's bytes count too)
 _SAFE = re.compile(r"[^A-Za-z0-9._-]")
 
@@ -73,6 +85,7 @@ class MjcfFiles:
     assets: dict[str, bytes] = field(default_factory=dict)
     data: bytes = b""
     names: dict[str, str] = field(default_factory=dict)
+    absent: set[str] = field(default_factory=set)  # asset names of files not read
 
     def explain(self, message: str) -> str:
         """``message`` (MuJoCo's) with asset names put back as the files they came from."""
@@ -111,8 +124,11 @@ def _strip(name: str) -> str:
 class _Reader:
     """Reads one model's files (module doc); ``fail`` makes the messages."""
 
-    def __init__(self, path: Path, root: Path | None) -> None:
+    def __init__(
+        self, path: Path, root: Path | None, missing: Missing | None = None, wanted: bool = True
+    ) -> None:
         self.path, self.root = path, root
+        self.missing, self.wanted = missing, wanted
         self.base = str(path.parent)
         self.total = 0
         self.includes = 0
@@ -237,12 +253,18 @@ class _Reader:
                     "(meshes, height fields and textures are read from files); remove it"
                 )  # fmt: skip
             folder = settings[_FOLDER[el.tag]]
+            if el.get("name") is None and el.get("file") is not None:
+                # MuJoCo names an unnamed asset by its file (no folder, no extension):
+                # keep that name, which geoms use, when the file name is replaced
+                el.set("name", posixpath.splitext(_strip(el.get("file", "")))[0])
             for attr in attrs:
                 value = el.get(attr, "")
                 self.check_name(doc, el, attr, value)
                 name = _strip(value) if settings["strippath"] else value
                 full = _join(self.base, folder, name)
-                if full not in self.keys:
+                if full not in self.keys and self.absent(doc, el, value, full):
+                    self.out.absent.add(self.key(full, "m"))
+                elif full not in self.keys:
                     what = f"{el.tag} file"
                     data = self.read(doc, el, attr, full, what)
                     if el.tag == "mesh":
@@ -252,12 +274,37 @@ class _Reader:
                 el.set(attr, self.keys[full])
 
 
-def read_mjcf(path: str | os.PathLike, root: str | os.PathLike | None = None) -> MjcfFiles:
+    def absent(self, doc: _Doc, el: ET.Element, value: str, full: str) -> bool:
+        """Whether mesh or texture file ``full`` is left unread: not wanted (only the
+        kinematics are), or found nowhere and so listed in ``missing``
+        (:mod:`workcell.robots.mjcf_missing` stands in for it)."""
+        if el.tag not in _STAND_IN:
+            return False
+        if not self.wanted:
+            return True
+        if self.missing is None or os.path.lexists(full):
+            return False
+        if self.root is not None and leaves_root(full, self.root) is not None:
+            return False  # refused by read(), the same whether it exists outside
+        where = f"<{el.tag}> (line {doc.lines.get(el, '?')} of '{doc.path}')"
+        self.missing.add(value, where, [full], _STAND_IN[el.tag])
+        return True
+
+
+def read_mjcf(
+    path: str | os.PathLike,
+    root: str | os.PathLike | None = None,
+    *,
+    missing: Missing | None = None,
+    wanted: bool = True,
+) -> MjcfFiles:
     """The MJCF file ``path`` and every file it names (module doc), ready for
     :func:`spec_from_files`. ModelError for a file refused or unreadable (naming the
-    element and its line), LimitError over the work limits."""
+    element and its line), LimitError over the work limits. With ``missing``, a mesh or
+    texture file found nowhere is listed there instead (its asset name in
+    ``MjcfFiles.absent``); ``wanted`` False reads no mesh or texture file at all."""
     p = Path(os.path.abspath(path))
-    return _Reader(p, None if root is None else Path(root)).run()
+    return _Reader(p, None if root is None else Path(root), missing, wanted).run()
 
 
 def spec_from_files(files: MjcfFiles, what: str) -> mujoco.MjSpec:

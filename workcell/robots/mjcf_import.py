@@ -45,7 +45,9 @@ from workcell.errors import ModelError, WorkcellError
 from workcell.robots.chain import Joint
 from workcell.robots.meshfile import joint_speeds, primitive, sha256
 from workcell.robots.mjcf_files import read_mjcf, spec_from_files
+from workcell.robots.mjcf_missing import stand_in_missing
 from workcell.robots.robot import Robot, RobotFile
+from workcell.robots.standin import Missing, capsule
 from workcell.robots.tree import Shape, TreeLink, build_robot
 from workcell.robots.urdf import CONTINUOUS_LIMIT
 from workcell.spatial import pose_from_pos_quat
@@ -61,12 +63,17 @@ _HINGE, _SLIDE, _BALL = (
 _DEFAULT_RGBA = (0.5, 0.5, 0.5, 1.0)
 
 
-def _spec(path: Path, root: Path | None) -> tuple[mujoco.MjModel, bytes]:
-    """MuJoCo's compile of the file (and the file's bytes), within the work limits; every
-    file it names read by us, confined to ``root`` (:mod:`workcell.robots.mjcf_files`)."""
+def _spec(
+    path: Path, root: Path | None, missing: Missing, geometry: bool
+) -> tuple[mujoco.MjModel, bytes, tuple[set[str], set[str]]]:
+    """MuJoCo's compile of the file (and the file's bytes, the names of the geoms that
+    stand in for missing meshes and of the bodies with stated inertias:
+    :mod:`workcell.robots.mjcf_missing`), within the work limits; every file it names
+    read by us, confined to ``root`` (:mod:`workcell.robots.mjcf_files`)."""
     what = f"MJCF file '{path}'"
-    files = read_mjcf(path, root)
+    files = read_mjcf(path, root, missing=missing, wanted=geometry)
     spec = spec_from_files(files, what)
+    placeholders = stand_in_missing(spec, files.absent)
     try:
         model = spec.compile()
     except ValueError as exc:
@@ -75,7 +82,7 @@ def _spec(path: Path, root: Path | None) -> tuple[mujoco.MjModel, bytes]:
         limits.check("max_facets", int(model.mesh_facenum[i]), f"{what}: mesh {i}")
     sizes = [np.abs(a).max(initial=0.0) for a in (model.body_pos, model.geom_size, model.site_pos)]
     limits.check("max_coordinate", float(max(sizes)), f"{what}: a body, geom or site")
-    return model, files.data
+    return model, files.data, placeholders
 
 
 def _geom_mesh(m: mujoco.MjModel, g: int) -> trimesh.Trimesh | None:
@@ -99,12 +106,19 @@ def _geom_mesh(m: mujoco.MjModel, g: int) -> trimesh.Trimesh | None:
     return primitive(kind, size=tuple(float(v) for v in size), what=what)
 
 
-def _shapes(m: mujoco.MjModel, body: int) -> list[Shape]:
+def _shapes(m: mujoco.MjModel, body: int, standins: frozenset[int], inertial: bool) -> list[Shape]:
+    """A body's drawn and colliding geoms; those in ``standins`` (placeholders of missing
+    meshes) become the body's one capsule stand-in (:mod:`workcell.robots.standin`),
+    sized from the body's inertia when the file states it (``inertial``)."""
     out = []
+    stand = [False, False]  # the stand-in is drawn, collides
     for g in np.flatnonzero(m.geom_bodyid == body):
         visible = int(m.geom_group[g]) <= 2
         collides = bool(m.geom_contype[g] or m.geom_conaffinity[g])
         if not (visible or collides):
+            continue
+        if int(g) in standins:
+            stand = [stand[0] or visible, stand[1] or collides]
             continue
         mesh = _geom_mesh(m, int(g))
         if mesh is None:
@@ -114,6 +128,17 @@ def _shapes(m: mujoco.MjModel, body: int) -> list[Shape]:
             rgba = tuple(float(v) for v in m.mat_rgba[m.geom_matid[g]])
         T = pose_from_pos_quat(m.geom_pos[g], m.geom_quat[g])
         out.append(Shape(mesh, T, rgba, visible=visible, pieces=() if collides else None))
+    if any(stand):
+        children = np.flatnonzero(m.body_parentid == body)
+        ends = [m.body_pos[c] for c in children if c != body]
+        mesh = capsule(
+            ends,
+            com=m.body_ipos[body] if inertial else None,
+            mass=float(m.body_mass[body]) if inertial else 0.0,
+            inertia=m.body_inertia[body] if inertial else None,
+            parent_length=float(np.linalg.norm(m.body_pos[body])),
+        )
+        out.append(Shape(mesh, np.eye(4), None, visible=stand[0], pieces=() if stand[1] else None))
     return out
 
 
@@ -122,12 +147,21 @@ def _name(m: mujoco.MjModel, kind: str, i: int) -> str:
     return obj.name or f"{kind}{i}"
 
 
-def _link(m: mujoco.MjModel, b: int, names: list[str], geometry: bool) -> TreeLink:
-    """Body b as a TreeLink: its pose at q = 0 in its parent's frame and its joint."""
+def _link(
+    m: mujoco.MjModel,
+    b: int,
+    names: list[str],
+    geometry: bool,
+    placeholders: tuple[frozenset[int], set[str]],
+) -> TreeLink:
+    """Body b as a TreeLink: its pose at q = 0 in its parent's frame and its joint
+    (``placeholders``: the geoms standing in for missing meshes, the bodies with stated
+    inertias)."""
     origin = pose_from_pos_quat(m.body_pos[b], m.body_quat[b])
     parent = None if b == 0 else names[m.body_parentid[b]]
     link = TreeLink(names[b], parent, origin, what=f"body '{names[b]}'")
-    link.shapes = _shapes(m, b) if geometry else []
+    standins, inertial = placeholders
+    link.shapes = _shapes(m, b, standins, names[b] in inertial) if geometry else []
     n = int(m.body_jntnum[b])
     if n == 0:
         return link
@@ -176,20 +210,27 @@ def from_mjcf(
     name: str | None = None,
     gripper: bool = True,
     geometry: bool = True,
+    strict: bool = False,
     root: str | os.PathLike | None = None,
 ) -> Robot:
     """The robot of MJCF file ``path``: the hinge/slide chain from ``base_body`` to
     ``tip_body`` (or ``tool_site``'s body), see the module doc for the defaults and what
     is read. ``name`` names the robot (default: the model's name); ``gripper`` False
-    leaves the file's parallel gripper out; ``geometry`` False reads no geoms; ``root``:
-    no file outside this folder is read. ModelError for a file that cannot be used.
+    leaves the file's parallel gripper out; ``geometry`` False reads no geoms (nor any
+    mesh file); ``strict``: a mesh file found nowhere is a ModelError (default: a warning
+    and the body's capsule stand-in, :mod:`workcell.robots.mjcf_missing`); ``root``: no
+    file outside this folder is read. ModelError for a file that cannot be used.
     """
     p = Path(os.path.abspath(path))
     what = f"MJCF file '{path}'"
-    m, data = _spec(p, None if root is None else Path(root))
+    missing = Missing(what, strict)
+    m, data, (placeholders, inertial) = _spec(
+        p, None if root is None else Path(root), missing, geometry
+    )
+    standins = (frozenset(int(m.geom(n).id) for n in placeholders), inertial)
     names = [_name(m, "body", b) for b in range(m.nbody)]
     names[0] = "world"
-    tree = {names[b]: _link(m, b, names, geometry) for b in range(m.nbody)}
+    tree = {names[b]: _link(m, b, names, geometry, standins) for b in range(m.nbody)}
     if len(tree) != m.nbody:
         raise ModelError(f"{what}: body names repeat; name the bodies uniquely")
 
@@ -237,7 +278,9 @@ def from_mjcf(
         "name": name,
         "gripper": gripper,
         "geometry": geometry,
+        "strict": strict,
     }
+    missing.warn()
     model_name = bytes(m.names[: m.names.index(b"\0")]).decode(errors="replace")
     return build_robot(
         tree,

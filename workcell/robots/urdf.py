@@ -18,19 +18,19 @@ What is read (`URDF <http://wiki.ros.org/urdf/XML>`_, the ROS robot description)
   DAE, with ``scale``), ``box``, ``cylinder``, ``sphere`` (and ``capsule``); colours from
   ``<material>`` (inline, or by name from the robot's materials), else the mesh file's
   own (a DAE's materials). Visual meshes are drawn and carry the mass; collision meshes
-  collide, a convex one as itself, any other as its CoACD pieces
-  (:func:`workcell.decompose.decompose`, cached on disk);
+  collide, a convex one as itself, any other as its hull when that fits it, else as
+  CoACD pieces, all decomposed in one batch at the end of the read
+  (:mod:`workcell.robots.linkshapes`: bounded in time, in child processes, cached);
 - the file is read within ``max_file_bytes`` and parsed by expat with every entity
   declaration refused (:func:`workcell.robots.meshfile.parse_xml`).
 
-Mesh file names: ``package://PKG/REL`` is looked up as ``packages[PKG]/REL``, then
-``S/REL`` for each folder S of ``search``, then under the URDF's folder and its parent
-(the ROS layout ``PKG/urdf/robot.urdf``: real files name packages such as
-``kuka_kr16_support`` whose folder is called otherwise); ``file:///abs`` and plain paths
-are taken as they are (relative to the URDF's folder). A visual mesh that is found
-nowhere falls back to the link's collision geometry with a warning; any other missing
-file raises ModelError listing every place tried. With ``root`` (a server's folder),
-places outside it are not tried.
+Mesh files are looked for as :mod:`workcell.robots.urdf_doc` says (``packages``,
+``search``, beside the URDF, the ROS layout, pybullet's ``package://meshes/...``). A mesh
+file found nowhere never stops the import (the kinematics are all in the file): one
+warning lists each such file as the URDF wrote it, the element, and every place tried; a
+missing visual mesh is drawn with the link's collision geometry, anything else is
+replaced by a capsule between the link's joint origins (:mod:`workcell.robots.standin`).
+``strict=True`` makes a missing file a ModelError instead.
 
 Errors (ModelError, naming the element and its line): malformed XML, a missing link, a
 link with two parents, a loop, an unknown or unsupported joint type, bad numbers.
@@ -50,24 +50,24 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
-from workcell import limits
-from workcell.decompose import DEFAULT_CONCAVITY, decompose
+from workcell.checks import is_finite_number
 from workcell.errors import ModelError, WorkcellError
-from workcell.files import leaves_root, read_bytes
-from workcell.meshgeoms import is_convex
+from workcell.files import read_bytes
 from workcell.robots.chain import Joint
-from workcell.robots.meshfile import joint_speeds, load_mesh, parse_xml, primitive, sha256
+from workcell.robots.linkshapes import LINK_CONCAVITY, LINK_SECONDS, LinkBatch
+from workcell.robots.meshfile import joint_speeds, parse_xml, sha256
 from workcell.robots.robot import Robot, RobotFile
-from workcell.robots.tree import Shape, TreeLink, build_robot
-from workcell.spatial import rot_x, rot_y, rot_z, translation
+from workcell.robots.standin import capsule
+from workcell.robots.tree import TreeLink, build_robot
+from workcell.robots.urdf_doc import UrdfDoc
 
 __all__ = ["CONTINUOUS_LIMIT", "from_urdf"]
 
@@ -76,156 +76,9 @@ _KINDS = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prisma
 _UNSUPPORTED = ("planar", "floating")
 
 
-class _Doc:
-    """One URDF document: elements' lines, materials, and how its files are found."""
-
-    def __init__(
-        self,
-        path: Path,
-        lines: dict[ET.Element, int],
-        packages: Mapping[str, Path],
-        search: Sequence[Path],
-        root: Path | None,
-    ) -> None:
-        self.path, self.lines, self.packages, self.search = path, lines, packages, search
-        self.root = None if root is None else Path(os.path.realpath(root))
-        self.materials: dict[str, tuple[float, ...]] = {}
-        self.what = f"URDF file '{path}'"
-        self.geometry, self.concavity = True, DEFAULT_CONCAVITY
-
-    def at(self, el: ET.Element, kind: str, name: str | None = None) -> str:
-        shown = f" '{name}'" if name is not None else ""
-        return f"{kind}{shown} (line {self.lines.get(el, '?')})"
-
-    def fail(self, where: str, msg: str) -> ModelError:
-        return ModelError(f"{self.what}: {where}: {msg}")
-
-    def floats(
-        self, el: ET.Element | None, attr: str, n: int, default: tuple[float, ...], where: str
-    ) -> tuple[float, ...]:
-        text = None if el is None else el.get(attr)
-        if text is None:
-            return default
-        try:
-            v = tuple(float(x) for x in text.split())
-        except ValueError:
-            v = ()
-        if len(v) != n or not all(math.isfinite(x) for x in v):
-            raise self.fail(where, f"{el.tag} {attr}={text!r} must be {n} finite number(s)")
-        return v
-
-    def origin(self, el: ET.Element | None, where: str) -> np.ndarray:
-        o = None if el is None else el.find("origin")
-        xyz = self.floats(o, "xyz", 3, (0.0, 0.0, 0.0), where)
-        r, p, y = self.floats(o, "rpy", 3, (0.0, 0.0, 0.0), where)
-        limits.check("max_coordinate", max(abs(v) for v in xyz), where)
-        return translation(*xyz) @ rot_z(y) @ rot_y(p) @ rot_x(r)  # URDF: fixed axes x, y, z
-
-    def colour(self, el: ET.Element | None, where: str) -> tuple[float, ...] | None:
-        if el is None:
-            return None
-        c = el.find("color")
-        if c is not None:
-            rgba = self.floats(c, "rgba", 4, (0.7, 0.7, 0.72, 1.0), where)
-            if not all(0 <= v <= 1 for v in rgba):
-                raise self.fail(where, f"colour rgba {list(rgba)} must be 4 numbers in [0, 1]")
-            return rgba
-        return self.materials.get(el.get("name", ""))
-
-    # ------------------------------------------------------------------ files
-    def places(self, uri: str) -> list[Path]:
-        """Where mesh file ``uri`` is looked for, in order (module doc)."""
-        here = self.path.parent
-        if uri.startswith("package://"):
-            pkg, _, rel = uri[len("package://") :].partition("/")
-            folders = [self.packages[pkg]] if pkg in self.packages else []
-            return [f / rel for f in (*folders, *self.search, here, here.parent)]
-        if uri.startswith("file://"):
-            return [Path(uri[len("file://") :])]
-        return [here / uri]
-
-    def find(self, uri: str, where: str) -> Path | None:
-        """The first existing place of ``uri``; None (and the places in ``self.tried``)."""
-        self.uri, self.tried = uri, []
-        for p in self.places(uri):
-            real = Path(os.path.realpath(p))
-            why = None if self.root is None else leaves_root(real, self.root)
-            if why is not None:
-                self.tried.append(f"{p} ({why.removeprefix('it ')}: not tried)")
-            elif real.is_file():
-                return real
-            else:
-                self.tried.append(str(p))
-        return None
-
-
-def _geometry(doc: _Doc, el: ET.Element, where: str) -> list[tuple[trimesh.Trimesh, tuple | None]]:
-    """The meshes of a <visual> or <collision> (with their own colours), or None parts
-    when a mesh file is missing (``doc.tried`` says where it was looked for)."""
-    g = el.find("geometry")
-    shape = None if g is None else next(iter(g), None)
-    if shape is None:
-        raise doc.fail(where, f"<{el.tag}> needs a <geometry> with a mesh, box, cylinder or sphere")
-    w = f"{where} {shape.tag}"
-    if shape.tag == "mesh":
-        uri = shape.get("filename")
-        if not uri:
-            raise doc.fail(where, "<mesh> needs a filename")
-        scale = doc.floats(shape, "scale", 3, (1.0, 1.0, 1.0), where)
-        found = doc.find(uri, where)
-        if found is None:
-            return []
-        return load_mesh(found, scale=scale, what=f"{doc.what}: {where}")  # type: ignore[arg-type]
-    sizes = {
-        "box": ("size", 3),
-        "cylinder": ("radius", 1),
-        "sphere": ("radius", 1),
-        "capsule": ("radius", 1),
-    }
-    if shape.tag not in sizes:
-        raise doc.fail(where, f"unknown geometry <{shape.tag}>; known: mesh, {', '.join(sizes)}")
-    attr, n = sizes[shape.tag]
-    size = doc.floats(shape, attr, n, (), w)
-    if shape.tag in ("cylinder", "capsule"):
-        size += doc.floats(shape, "length", 1, (), w)
-    return [(primitive(shape.tag, size=size, what=f"{doc.what}: {w}"), None)]
-
-
-def _shapes(doc: _Doc, link: ET.Element, where: str) -> list[Shape]:
-    """A link's collision shapes (hidden, colliding) and visual shapes (module doc)."""
-    shapes: list[Shape] = []
-    for k, el in enumerate(link.findall("collision")):
-        w = f"{where} collision {k + 1}"
-        parts = _geometry(doc, el, w)
-        if not parts:
-            raise doc.fail(w, f"mesh file '{doc.uri}' not found; tried: {'; '.join(doc.tried)}")
-        T = doc.origin(el, w)
-        for mesh, _ in parts:
-            pieces = ()  # convex, or its hull when asked (concavity None)
-            if doc.concavity is not None and not is_convex(mesh):
-                pieces = tuple(decompose(mesh, doc.concavity, label=where))
-            shapes.append(Shape(mesh, T, None, visible=False, pieces=pieces))
-    collisions = list(shapes)
-    for k, el in enumerate(link.findall("visual")):
-        w = f"{where} visual {k + 1}"
-        colour = doc.colour(el.find("material"), w)
-        parts = _geometry(doc, el, w)
-        if not parts:
-            if not collisions:
-                raise doc.fail(w, f"mesh file '{doc.uri}' not found; tried: {'; '.join(doc.tried)}")
-            warnings.warn(
-                f"{doc.what}: {w}: mesh file '{doc.uri}' not found (tried: {'; '.join(doc.tried)}); "
-                "the link is drawn with its collision geometry instead",
-                stacklevel=4,
-            )
-            shapes.extend(Shape(s.mesh, s.transform, colour) for s in collisions)
-            continue
-        T = doc.origin(el, w)
-        shapes.extend(Shape(mesh, T, colour or own) for mesh, own in parts)
-    return shapes
-
-
-def _joint(doc: _Doc, el: ET.Element, links: Mapping[str, ET.Element]) -> tuple[str, str, TreeLink]:
+def _joint(
+    doc: UrdfDoc, el: ET.Element, links: Mapping[str, ET.Element]
+) -> tuple[str, str, TreeLink]:
     """(parent, child, the child's TreeLink without shapes) of a <joint>."""
     name = el.get("name")
     where = doc.at(el, "joint", name)
@@ -278,7 +131,7 @@ def _joint(doc: _Doc, el: ET.Element, links: Mapping[str, ET.Element]) -> tuple[
     return ends[0], ends[1], tl
 
 
-def _tree(doc: _Doc, robot: ET.Element) -> dict[str, TreeLink]:
+def _tree(doc: UrdfDoc, robot: ET.Element) -> dict[str, TreeLink]:
     """Every link of the file as a TreeLink (shapes included), loops refused."""
     for m in robot.findall("material"):
         c = doc.colour(m, doc.at(m, "material", m.get("name")))
@@ -317,9 +170,20 @@ def _tree(doc: _Doc, robot: ET.Element) -> dict[str, TreeLink]:
                 )
             seen.append(n)
             n = tree[n].parent
+    if not doc.geometry:
+        return tree
+    queued: dict[str, list[tuple[int, int]]] = {}
     for n, el in elements.items():
-        if doc.geometry:
-            tree[n].shapes = _shapes(doc, el, doc.at(el, "link", n))
+        doc.queued = []
+        where = doc.at(el, "link", n)
+        tree[n].shapes = doc.shapes(
+            el, where, lambda n=n, el=el, w=where: _standin(doc, tree, n, el, w)
+        )
+        queued[n] = doc.queued
+    pieces = doc.batch.run() if doc.batch is not None else []
+    for n, entries in queued.items():  # the decomposed meshes get their pieces
+        for k, j in entries:
+            tree[n].shapes[k] = replace(tree[n].shapes[k], pieces=pieces[j])
     return tree
 
 
@@ -333,7 +197,9 @@ def from_urdf(
     name: str | None = None,
     gripper: bool = True,
     geometry: bool = True,
-    concavity: float | None = DEFAULT_CONCAVITY,
+    concavity: float | None = LINK_CONCAVITY,
+    link_seconds: float = LINK_SECONDS,
+    strict: bool = False,
     root: str | os.PathLike | None = None,
 ) -> Robot:
     """The robot of URDF file ``path``: the chain from ``base_link`` to ``tip_link`` (see
@@ -344,20 +210,29 @@ def from_urdf(
     file's robot name); ``gripper`` False leaves a parallel gripper of the file out;
     ``geometry`` False reads the kinematics only (no mesh is read: fast, invisible);
     ``concavity``: the CoACD error bound for non-convex collision meshes (None: collide
-    as their convex hulls, as MuJoCo's own URDF import does; a decomposition takes
-    seconds to minutes per mesh the first time, then comes from the cache); ``root``: no
-    file outside this folder is read (meshes included). ModelError naming the element
-    for a file that cannot be used.
+    as their convex hulls, as MuJoCo's own URDF import does; see
+    :mod:`workcell.robots.linkshapes`: a mesh close to its hull is its hull, the others
+    are decomposed together on all cores the first time, then come from the cache);
+    ``link_seconds``: the wall time one link's decomposition may take (s) before the
+    link collides as its hull, with a warning; ``strict``: a mesh file found nowhere is a
+    ModelError (default: a warning, and the link's capsule stand-in); ``root``: no file
+    outside this folder is read (meshes included). ModelError naming the element for a
+    file that cannot be used.
     """
     p = Path(path)
     data = read_bytes(p, what="URDF file", error=ModelError)
     pk = {str(k): Path(os.path.abspath(v)) for k, v in (packages or {}).items()}
     sr = [Path(os.path.abspath(s)) for s in search]
-    doc = _Doc(Path(os.path.abspath(p)), {}, pk, sr, None if root is None else Path(root))
-    doc.geometry, doc.concavity = bool(geometry), concavity
+    doc = UrdfDoc(
+        Path(os.path.abspath(p)), {}, pk, sr, None if root is None else Path(root), strict=strict
+    )
+    doc.geometry = bool(geometry)
     top, doc.lines = parse_xml(data, doc.what)
     if top.tag != "robot":
         raise ModelError(f"{doc.what}: the top element is <{top.tag}>, not <robot>")
+    robot_name = name or top.get("name") or p.stem
+    if concavity is not None:
+        doc.batch = LinkBatch(doc.what, robot_name, concavity, _seconds(link_seconds))
     tree = _tree(doc, top)
     roots = [n for n, t in tree.items() if t.parent is None]
     given_base = base_link
@@ -383,8 +258,10 @@ def from_urdf(
         "gripper": gripper,
         "geometry": geometry,
         "concavity": concavity,
+        "link_seconds": link_seconds,
+        "strict": strict,
     }
-    robot_name = name or top.get("name") or p.stem
+    doc.missing.warn()
     return build_robot(
         tree,
         base=base_link,
@@ -395,6 +272,22 @@ def from_urdf(
         keep_gripper=gripper,
         what=doc.what,
     )
+
+
+def _standin(
+    doc: UrdfDoc, tree: Mapping[str, TreeLink], name: str, el: ET.Element, where: str
+) -> trimesh.Trimesh:
+    """The capsule stand-in of link ``name`` (:mod:`workcell.robots.standin`)."""
+    ends = [t.origin[:3, 3] for t in tree.values() if t.parent == name]
+    com, mass, inertia = doc.inertial(el, where)
+    parent = float(np.linalg.norm(tree[name].origin[:3, 3]))
+    return capsule(ends, com=com, mass=mass, inertia=inertia, parent_length=parent)
+
+
+def _seconds(value: float) -> float:
+    if not (is_finite_number(value) and value > 0):
+        raise ModelError(f"link_seconds must be a number of seconds > 0, got {value!r}")
+    return float(value)
 
 
 def _below(tree: Mapping[str, TreeLink], name: str | None, ancestor: str) -> bool:

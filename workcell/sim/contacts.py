@@ -20,6 +20,18 @@ pair through.) Parent/child bodies and links up to two apart never collide (MuJo
 parent filter and the robot's ``<exclude>`` pairs); parts resting on a support touch at
 depth ~0, under the tolerance.
 
+**Mounting**: a robot stands on what its base touches. :meth:`ContactMonitor.mount`
+finds, for each robot, the static things (static parts, the ground) that its link 0
+(base) touches or comes within the tolerance of in a state (the start), and allows
+contact between them and the robot's link 1 (:attr:`ContactMonitor.allowed`): the first
+moving link of a real arm often reaches down to the mounting surface (a Panda's link 1
+collision capsule runs 60 mm below its base), and turns there about the vertical. A
+thing counts when it touches the base (signed distance within +-the tolerance: one sunk
+deeper is a collision, not a mount) at the base's underside (within the tolerance of the
+base's lowest point along the base frame's z axis, so a hanging robot stands on its
+ceiling and a wall beside the base is no mount). Every other pair of the robot and that
+part still collides (an arm link through the table is reported).
+
 :meth:`ContactMonitor.clearance` is the minimum signed distance between two things
 (negative: penetration depth), from ``mj_geomDistance`` over their geom pairs.
 """
@@ -36,11 +48,12 @@ from numpy.typing import NDArray
 from workcell.cell.compile import GROUND, CompiledCell
 from workcell.errors import ProgramError
 
-__all__ = ["DEFAULT_TOLERANCE", "ContactMonitor", "Penetration", "contact_model"]
+__all__ = ["DEFAULT_TOLERANCE", "ContactMonitor", "Penetration", "contact_model", "mounts_of"]
 
 DEFAULT_TOLERANCE = 1e-4  # m: deeper overlaps are collisions; shallower ones are touching
 _CLEARANCE_CAP = 100.0  # m: mj_geomDistance's distmax
 _CENTRE_SHIFT = 1e-11  # m per geom index (contact_model)
+_EPA = 1e-6  # m: how far a distance's nearest points may stray (MuJoCo's EPA)
 _SHIFT_DIRECTION = np.array([1.0, 2.0**0.5, 3.0**0.5]) / 6.0**0.5  # unit, no symmetry
 
 
@@ -70,6 +83,26 @@ def contact_model(model: mujoco.MjModel) -> mujoco.MjModel:
     return out
 
 
+def _lowest(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int], up: NDArray) -> float:
+    """The lowest point of mesh geoms along ``up`` (world, m); +inf for none."""
+    low = np.inf
+    for g in geoms:
+        i = int(model.geom_dataid[g])
+        if int(model.geom_type[g]) != int(mujoco.mjtGeom.mjGEOM_MESH) or i < 0:
+            continue
+        v = model.mesh_vert[model.mesh_vertadr[i] : model.mesh_vertadr[i] + model.mesh_vertnum[i]]
+        w = v @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]
+        low = min(low, float((w @ up).min()))
+    return low
+
+
+def _body(model: mujoco.MjModel, name: str) -> int | None:
+    try:
+        return int(model.body(name).id)
+    except KeyError:
+        return None
+
+
 class ContactMonitor:
     """Labels, exclusions and queries over the collision geoms of ``compiled`` (module doc)."""
 
@@ -94,6 +127,8 @@ class ContactMonitor:
         self.labels = labels
         self.colliding = np.flatnonzero((m.geom_contype != 0) | (m.geom_conaffinity != 0))
         self.excluded: set[tuple[int, int]] = set()  # body id pairs, (low, high)
+        self.allowed: set[tuple[str, str]] = set()  # label pairs (sorted) that may touch
+        self.mounts: dict[str, list[str]] = {}  # robot -> the static things it stands on
 
     # ------------------------------------------------------------------ things
     def robot_of(self, label: str) -> str | None:
@@ -126,6 +161,56 @@ class ContactMonitor:
         """Body ids of a thing's collision geoms."""
         return {int(self.model.geom_bodyid[g]) for g in self.geoms_of(thing)}
 
+    def mount(self, data: mujoco.MjData) -> dict[str, list[str]]:
+        """Find what each robot stands on in ``data``'s pose (module doc): set and return
+        :attr:`mounts` and add the (link 1, thing) pairs to :attr:`allowed`."""
+        m = self.model
+        static: dict[str, list[int]] = {}  # label -> geoms of the world body
+        for g in self.colliding:
+            if int(m.geom_bodyid[g]) == 0:
+                static.setdefault(self.labels[g], []).append(int(g))
+        self.mounts = {}
+        for robot, prefix in self._robots.items():
+            base, first = (_body(m, f"{prefix}link{k}") for k in (0, 1))
+            if base is None or first is None:
+                continue
+            own = [int(g) for g in self.colliding if int(m.geom_bodyid[g]) == base]
+            own = own or [g for g in range(m.ngeom) if int(m.geom_bodyid[g]) == base]
+            up = data.xmat[base].reshape(3, 3)[:, 2]  # the base frame's z: the robot's up
+            low = _lowest(m, data, own, up)
+            on = [x for x, gs in sorted(static.items()) if self._under(data, own, gs, up, low)]
+            self.mounts[robot] = on
+            link1 = m.body(first).name
+            self.allowed |= {(min(link1, x), max(link1, x)) for x in on}
+        return self.mounts
+
+    def _under(
+        self, data: mujoco.MjData, own: list[int], geoms: list[int], up: NDArray, low: float
+    ) -> bool:
+        """Whether the geoms touch the base geoms ``own`` (signed distance within +-the
+        tolerance) at the base's underside (within the tolerance of its lowest point
+        ``low`` along ``up``)."""
+        tol, fromto = self.tolerance, np.zeros(6)
+        found = False
+        for a in own:
+            for b in geoms:
+                d = mujoco.mj_geomDistance(self.model, data, a, b, 2 * tol, fromto)
+                if d < -tol:
+                    return False  # sunk into it: a collision, not a mount
+                if d <= tol and float(fromto[:3] @ up) <= low + tol + _EPA:
+                    found = True
+        return found
+
+    def allowed_geoms(self) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """(the geoms of the robots' link 1, the geoms of what they stand on) of
+        :attr:`allowed` (for the physics mode's contact bits)."""
+        robot_side = {x for pair in self.allowed for x in pair if self.robot_of(x) is not None}
+        other = {x for pair in self.allowed for x in pair} - robot_side
+        pick = [
+            [int(g) for g in self.colliding if self.labels[g] in s] for s in (robot_side, other)
+        ]
+        return np.array(pick[0], dtype=np.intp), np.array(pick[1], dtype=np.intp)
+
     # ------------------------------------------------------------------ queries
     def exclude(self, bodies_a: Iterable[int], bodies_b: Iterable[int]) -> set[tuple[int, int]]:
         """The (low, high) body pairs between two body sets (to add to :attr:`excluded`)."""
@@ -153,6 +238,8 @@ class ContactMonitor:
             if la == lb:
                 continue
             key = (la, lb) if la < lb else (lb, la)
+            if key in self.allowed:
+                continue
             depth = -float(dist[k])
             if depth > deepest.get(key, 0.0):
                 deepest[key] = depth
@@ -171,3 +258,12 @@ class ContactMonitor:
                 if d < best:
                     best, where = d, (self.labels[i], self.labels[j])
         return float(best), where[0], where[1]
+
+
+def mounts_of(compiled: CompiledCell, tolerance: float = DEFAULT_TOLERANCE) -> dict[str, list[str]]:
+    """Robot -> the static things it stands on in the compiled cell's initial state
+    (:meth:`ContactMonitor.mount`; ``tolerance`` in m)."""
+    model = contact_model(compiled.model)
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    return ContactMonitor(compiled, tolerance, model).mount(data)

@@ -156,9 +156,11 @@ class _Run(PhysicsEvents):
             )
         if not options["gravcomp"]:
             m.body_gravcomp[:] = 0.0
-        self.grip = GripContacts(m, cc, switching=not options["grip_contacts"])
+        mounts = sim.contacts.allowed_geoms()  # mounted robots' link 1 and what they stand on
+        self.grip = GripContacts(m, cc, switching=not options["grip_contacts"], mounts=mounts)
         self.compiled = replace(cc, model=m)
         self.monitor = ContactMonitor(self.compiled, 0.0)  # every contact; _collisions sorts
+        self.monitor.allowed = set(sim.contacts.allowed)
         d = self.d = mujoco.MjData(m)
         d.qpos[:] = sim.timeline.frame(0)[2]
         mujoco.mj_forward(m, d)

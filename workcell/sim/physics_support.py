@@ -14,10 +14,18 @@ get ``contype`` bit 30 and ``conaffinity`` bit 0 | bit 30 | the bits of the grip
 that do *not* hold them. MuJoCo makes a contact when ``contype1 & conaffinity2`` or
 ``contype2 & conaffinity1`` is non-zero, so a part touches the world, the arms, other
 parts and every gripper except those holding it.
+
+Mounted robots (:meth:`workcell.sim.contacts.ContactMonitor.mount`, ``mounts``): the
+static things they stand on get ``contype`` bit 29 and their link 1 bit 28 (instead of
+bit 0), and every other colliding geom has both bits in its ``conaffinity``, so link 1
+and its mount exert no force on each other while each touches everything else as
+before. (With several mounted robots, one's link 1 does not touch another's mount
+either.)
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 import mujoco
@@ -45,7 +53,8 @@ __all__ = [
 
 Array = NDArray[np.float64]
 _PART_BIT = 1 << 30
-_MAX_GRIPPERS = 29
+_MOUNT_BIT, _LINK1_BIT = 1 << 29, 1 << 28  # what mounted robots stand on, their link 1
+_MAX_GRIPPERS = 27
 
 
 class Plan:
@@ -113,8 +122,17 @@ class GripContacts:
     With ``switching`` False every contact stays as compiled and :meth:`hold` does nothing.
     """
 
-    def __init__(self, m: mujoco.MjModel, compiled: CompiledCell, *, switching: bool = True):
+    def __init__(
+        self,
+        m: mujoco.MjModel,
+        compiled: CompiledCell,
+        *,
+        switching: bool = True,
+        mounts: tuple[NDArray[np.intp], NDArray[np.intp]] | None = None,
+    ):
         self.m, self.enabled = m, switching
+        # bits every geom but the mounts and their robots' link 1 has in its conaffinity
+        self.extra = _MOUNT_BIT | _LINK1_BIT if mounts is not None and len(mounts[1]) else 0
         robots = list(compiled.gripper_bodies)
         if len(robots) > _MAX_GRIPPERS:
             raise ProgramError(
@@ -132,12 +150,21 @@ class GripContacts:
             p: np.flatnonzero((m.geom_bodyid == b) & collide) for p, b in self.part_body.items()
         }
         self.held: dict[str, int] = {p: 0 for p in self.part_body}  # bits of holding grippers
+        if self.extra:
+            link1, mount = mounts  # type: ignore[misc]
+            others = np.flatnonzero(collide)
+            others = others[~np.isin(others, mount)]
+            m.geom_conaffinity[others] |= self.extra
+            m.geom_conaffinity[link1] &= ~_MOUNT_BIT
+            m.geom_contype[mount] = _MOUNT_BIT
+            m.geom_contype[link1] = _LINK1_BIT
+            self._body_masks(range(m.nbody))
         if not switching:
             return
         for r, bodies in self.gripper_bodies.items():
             g = np.flatnonzero(np.isin(m.geom_bodyid, bodies) & collide)
             m.geom_contype[g] = self.bit[r]
-            m.geom_conaffinity[g] = 1 | self.all
+            m.geom_conaffinity[g] = 1 | self.all | self.extra
             self._body_masks(bodies)
         for p in self.part_body:
             self._set_part(p)
@@ -145,10 +172,10 @@ class GripContacts:
     def _set_part(self, part: str) -> None:
         g = self.part_geoms[part]
         self.m.geom_contype[g] = _PART_BIT
-        self.m.geom_conaffinity[g] = 1 | _PART_BIT | (self.all & ~self.held[part])
+        self.m.geom_conaffinity[g] = 1 | _PART_BIT | self.extra | (self.all & ~self.held[part])
         self._body_masks([self.part_body[part]])
 
-    def _body_masks(self, bodies: list[int]) -> None:
+    def _body_masks(self, bodies: Iterable[int]) -> None:
         """A body's masks are the OR of its geoms' (MuJoCo's broad phase reads them)."""
         m = self.m
         for b in bodies:

@@ -229,6 +229,7 @@ class Simulator(
         self.grasps: list[GraspRecord] = []  # every grasp and release, in order
         self._holders: dict[str, list[str]] = {p: [] for p in cc.part_bodies}
         self.contacts = ContactMonitor(cc, contact_tolerance, self.model)
+        self.contacts.mount(self.data)  # a robot's link 1 may touch what its base stands on
         self._touching: set[tuple[str, str]] = set()
         self.sim_time = 0.0
         self._wall = 0.0
