@@ -75,6 +75,7 @@ applied undoes the command (:mod:`workcell.sim.frames`).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -102,6 +103,7 @@ from workcell.sim.contacts import (
 from workcell.sim.cycle import command_record
 from workcell.sim.frames import FrameRunner
 from workcell.sim.gripping import GraspRecord, GripperCommands, Hold
+from workcell.sim.jogging import JogCommands
 from workcell.sim.motion import MotionCommands
 from workcell.sim.profiles import step_times
 from workcell.sim.readback import ReadBack
@@ -123,6 +125,7 @@ class Simulator(
     PlanningCommands,
     RestingCommands,
     TaskCommands,
+    JogCommands,
     FrameRunner,
     ReadBack,
 ):
@@ -227,6 +230,8 @@ class Simulator(
         self._touching: set[tuple[str, str]] = set()
         self.sim_time = 0.0
         self._wall = 0.0
+        # f(frame, t) each time data shows a frame (observers: workcell.sim.frames)
+        self.frame_listeners: list[Callable[[int, float], None]] = []
         self.timeline = Timeline(self.model.nq, memory_limit=memory_limit, spill_dir=spill_dir)
         self.timeline.append(0.0, 0.0, self.data.qpos)
         if self.check_collisions:
