@@ -21,6 +21,7 @@ __all__ = [
     "RenderError",
     "StudyError",
     "UnreachableError",
+    "ViewError",
     "WorkcellError",
 ]
 
@@ -85,3 +86,8 @@ class StudyError(WorkcellError):
 class LimitError(WorkcellError):
     """Work over a limit of :mod:`workcell.limits` was refused before it started (the
     message names the limit and how to raise it)."""
+
+
+class ViewError(WorkcellError):
+    """The live view could not start or do what its page asked (a port in use, a file
+    name outside the working folder)."""

@@ -1,0 +1,416 @@
+"""The live view: a web page that shows a simulator's cell as its commands run.
+
+``Viewer(sim)`` starts a viser server (on loopback, behind a random token: see
+:mod:`workcell.view.guard`) and hangs two listeners on the simulator
+(``sim.frame_listeners``, ``sim.event_listeners``): whatever runs the simulator (Python,
+the command language, the server) is shown as it happens.
+
+Pacing: with ``speed`` (default 1.0) each frame is shown when the wall clock has run its
+simulated time / speed since the command began (the simulator waits, in the listener, for
+frames that come early; frames that come late are dropped from the page but never
+slow anything; at most 60 pushes a second). With ``speed=None`` only each command's end
+state is shown (at its event). A viewer with no page open, or closed, returns from its
+listeners at once. The page's Pause button holds the program inside the next frame
+until Resume (or until the page closes).
+
+The page: the clock and the run state, camera presets, Pause; the events (collisions in
+red; choosing one shows its frame); the timeline slider (scrubs every frame of what has
+run, tool paths drawn as lines) and the cycle-time report; per robot the jog panel
+(:mod:`workcell.view.jog`); the program panel (:mod:`workcell.view.program`). Things
+in contact at the shown frame are red, with a marker and the depth at the contact point.
+
+Page actions that change the simulator (jog, gripper, teach, run) take :attr:`Viewer.lock`
+and are refused while a command runs; front ends that run commands from another thread
+(the shell, the server) hold the same lock around each command. ``control=False`` (the
+server's default) makes the page read-only.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import mujoco
+import numpy as np
+
+from workcell.checks import is_finite_number
+from workcell.errors import ProgramError
+from workcell.sim.timeline import Event
+from workcell.view.cameras import View, presets
+from workcell.view.contacts import contacts
+from workcell.view.guard import LOOPBACK, Guard, new_token, start_server, stop_quietly
+from workcell.view.scene import Scene
+
+if TYPE_CHECKING:
+    import viser
+
+    from workcell.sim.simulator import Simulator
+
+__all__ = ["PALETTE", "Viewer"]
+
+PALETTE = [(230, 80, 40), (40, 120, 230), (40, 170, 80), (200, 60, 200), (220, 180, 30)]
+_PUSH_INTERVAL = 1.0 / 60.0  # s between two pictures sent to the page while running
+_BUSY_GAP = 0.25  # s after the last frame during which a command counts as running
+_EVENTS_SHOWN = 14
+_PATH_STEP = 1e-3  # m: tool path points closer than this to the last one are dropped
+
+
+class Viewer:
+    """A live web view of ``sim`` (module doc); ``.url``, ``.close()``, a context manager.
+
+    ``host`` (default loopback) and ``port`` (0: any free port) to listen on; ``speed``:
+    frames shown at ``speed`` x real time, None: each command's end state only;
+    ``root``: the folder the page's files (saved programs) are written in (default: the
+    working folder); ``control``: the page may jog, teach and run (False: read-only).
+    """
+
+    def __init__(self, sim: Simulator | None, *, host: str = "127.0.0.1", port: int = 0,
+                 speed: float | None = 1.0, root: str | Path = ".",
+                 control: bool = True) -> None:  # fmt: skip
+        if speed is not None and not (is_finite_number(speed) and speed > 0):
+            raise ProgramError(f"Viewer: speed must be a number > 0 or None, got {speed!r}")
+        if not (isinstance(port, int) and 0 <= port <= 65535):
+            raise ProgramError(f"Viewer: port must be an integer 0 ... 65535, got {port!r}")
+        self.speed = None if speed is None else float(speed)
+        self.root = Path(root).resolve()
+        self.control = bool(control)
+        self.guard = Guard(new_token(), loopback=host in LOOPBACK)
+        self.server: viser.ViserServer = start_server(host, port, self.guard)
+        shown = "127.0.0.1" if host in ("0.0.0.0", "") else host
+        shown = f"[{shown}]" if ":" in shown and not shown.startswith("[") else shown
+        self.url = f"http://{shown}:{self.server.get_port()}/{self.guard.token}"
+        self.lock = threading.RLock()
+        self.sim: Simulator | None = None
+        self.scene: Scene | None = None
+        self.pushes = 0  # pictures sent to the page (for benchmarks)
+        self._closed = False
+        self._clients = 0
+        self._paused = False
+        self._resume = threading.Condition()
+        self._anchor: tuple[float, float] | None = None  # (wall, sim time) of pacing
+        self._last_push = 0.0
+        self._last_frame = 0.0
+        self._scrubbed: int | None = None
+        self._views: dict[str, View] = {}
+        self._paths: dict[str, tuple[int, list[np.ndarray]]] = {}
+        self._scratch: mujoco.MjData | None = None
+        self._build_page()
+        self.server.on_client_connect(self._connected)
+        self.server.on_client_disconnect(self._disconnected)
+        if sim is not None:
+            self.attach(sim)
+
+    # ------------------------------------------------------------------ life cycle
+    def __enter__(self) -> Viewer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Detach from the simulator and stop the server (the page goes blank)."""
+        if self._closed:
+            return
+        self._closed = True
+        self._detach()
+        with self._resume:
+            self._resume.notify_all()
+        stop_quietly(self.server)
+
+    @property
+    def clients(self) -> int:
+        """Pages connected now."""
+        return self._clients
+
+    @property
+    def busy(self) -> bool:
+        """True while a command is running (a frame was applied less than 0.25 s ago)."""
+        return time.perf_counter() - self._last_frame < _BUSY_GAP
+
+    def attach(self, sim: Simulator) -> None:
+        """Show ``sim`` (another simulator than before: the scene is rebuilt)."""
+        if sim is self.sim:
+            return
+        self._detach()
+        self.sim = sim
+        self.server.scene.reset()
+        self.server.scene.set_up_direction("+z")
+        cc, m = sim.compiled, sim.model
+        bases = {r: p.world_base for r, p in sim.cell.robots.items()}
+        self.scene = Scene(self.server, m, sim.data, labels=sim.contacts.labels,
+                           tool_sites=dict(sim._site), bases=bases)  # fmt: skip
+        reaches = {r: _reach(p.robot) for r, p in sim.cell.robots.items()}
+        self._views = presets(m, sim.data, bases, reaches, dict(cc.cameras))
+        self.camera_choice.options = tuple(self._views)
+        self.camera_choice.value = "overview"
+        self._apply_view(self._views["overview"], None)
+        self._scratch = mujoco.MjData(m)
+        self._paths = {}
+        from workcell.view.jog import JogPanel
+        from workcell.view.program import ProgramPanel
+
+        for panel in getattr(self, "_panels", []):
+            panel.remove()
+        self.jog = JogPanel(self)
+        self.program = ProgramPanel(self)
+        self._panels = [self.jog, self.program]
+        sim.frame_listeners.append(self._on_frame)
+        sim.event_listeners.append(self._on_event)
+        self.refresh()
+
+    def _detach(self) -> None:
+        sim = self.sim
+        if sim is None:
+            return
+        if self._on_frame in sim.frame_listeners:
+            sim.frame_listeners.remove(self._on_frame)
+        if self._on_event in sim.event_listeners:
+            sim.event_listeners.remove(self._on_event)
+
+    # ------------------------------------------------------------------ the page
+    def _build_page(self) -> None:
+        gui = self.server.gui
+        gui.configure_theme(control_width="large", show_share_button=False, show_logo=False)
+        self.server.gui.set_panel_label("workcell")
+        self.status = gui.add_markdown("**t = 0 s**")
+        self.pause_button = gui.add_button("Pause", hint="hold the program at its next frame")
+        self.pause_button.on_click(lambda e: self.set_paused(not self._paused))
+        self.camera_choice = gui.add_dropdown("View", ("overview",), initial_value="overview")
+        self.camera_choice.on_update(self._camera_chosen)
+        with gui.add_folder("Timeline"):
+            self.slider = gui.add_slider("frame", min=0, max=1, step=1, initial_value=0)
+            self.slider.on_update(self._slider_moved)
+            self.paths_box = gui.add_checkbox("tool paths", True)
+            self.paths_box.on_update(lambda e: self._draw_paths())
+            self.event_choice = gui.add_dropdown("go to event", ("-",), initial_value="-")
+            self.event_choice.on_update(self._event_chosen)
+            self.events_md = gui.add_markdown("no events yet")
+        with gui.add_folder("Cycle time", expand_by_default=False):
+            self.cycle_md = gui.add_markdown("")
+
+    def notify(self, title: str, body: str, client: Any = None, *, error: bool = False) -> None:
+        """A message on the page (one client's, or every page's)."""
+        targets = [client] if client is not None else list(self.server.get_clients().values())
+        for c in targets:
+            c.add_notification(title, body, auto_close_seconds=8.0,
+                               color="red" if error else None)  # fmt: skip
+
+    def set_paused(self, paused: bool) -> None:
+        """Pause (the program waits at its next frame) or resume."""
+        with self._resume:
+            self._paused = bool(paused)
+            self._resume.notify_all()
+        self.pause_button.label = "Resume" if self._paused else "Pause"
+        self._anchor = None
+        self._status()
+
+    def _connected(self, client: Any) -> None:
+        self._clients += 1
+        self.refresh()
+
+    def _disconnected(self, client: Any) -> None:
+        self._clients = max(0, self._clients - 1)
+        if self._clients == 0:
+            with self._resume:
+                self._resume.notify_all()
+
+    def _apply_view(self, v: View, client: Any) -> None:
+        cams = [client.camera] if client is not None else [
+            c.camera for c in self.server.get_clients().values()]  # fmt: skip
+        ic = self.server.initial_camera
+        ic.position, ic.look_at, ic.up, ic.fov = tuple(v.eye), tuple(v.look_at), tuple(v.up), v.fov
+        for cam in cams:
+            with self.server.atomic():
+                cam.up_direction = tuple(v.up)
+                cam.position = tuple(v.eye)
+                cam.look_at = tuple(v.look_at)
+                cam.fov = v.fov
+
+    def _camera_chosen(self, event: Any) -> None:
+        v = self._views.get(self.camera_choice.value)
+        if v is not None and event.client is not None:
+            self._apply_view(v, event.client)
+
+    # ------------------------------------------------------------------ listeners
+    def _on_frame(self, frame: int, t: float) -> None:
+        """Frame listener (module doc: pacing, pause)."""
+        if self._clients == 0 or self._closed:
+            return
+        now = time.perf_counter()
+        self._last_frame = now
+        if self._paused:
+            self._wait_resumed()
+            now = time.perf_counter()
+        sim = self.sim
+        assert sim is not None
+        replay = frame < len(sim.timeline)  # undo, replay: data shows a recorded frame
+        if self.speed is None and not replay:
+            return
+        if self.speed is not None and not replay:
+            if self._anchor is None or t < self._anchor[1]:
+                self._anchor = (now, t)
+            due = self._anchor[0] + (t - self._anchor[1]) / self.speed
+            if due - now > 0:
+                time.sleep(due - now)
+                now = time.perf_counter()
+            elif now - due > 0.1:  # far behind (a slow command, idle before): start again
+                self._anchor = (now, t)
+        if now - self._last_push >= _PUSH_INTERVAL:
+            self._push(frame, t)
+
+    def _wait_resumed(self) -> None:
+        with self._resume:
+            self._status()
+            while self._paused and self._clients > 0 and not self._closed:
+                self._resume.wait(0.5)
+        self._anchor = None
+
+    def _on_event(self, event: Event) -> None:
+        """Event listener: show the command's end state, the events, the report."""
+        if self._clients == 0 or self._closed:
+            return
+        self._anchor = None
+        self.refresh(live=True)
+
+    # ------------------------------------------------------------------ drawing
+    def _push(self, frame: int, t: float, data: mujoco.MjData | None = None) -> None:
+        """Send the state of ``data`` (default: the simulator's) as ``frame``."""
+        sim = self.sim
+        assert sim is not None
+        assert self.scene is not None
+        d = sim.data if data is None else data
+        touching = contacts(sim.contacts, d) if (sim.check_collisions or data is not None) else []
+        self.scene.show(d, touching)
+        self._scrubbed = None if data is None else frame
+        self._last_push = time.perf_counter()
+        self.pushes += 1
+        with self.server.atomic():
+            self.slider.max = max(1, len(sim.timeline) - 1, frame)
+            self.slider.value = frame
+            self._status(t, frame)
+            if data is None:
+                self.jog.follow()
+
+    def _status(self, t: float | None = None, frame: int | None = None) -> None:
+        sim = self.sim
+        if sim is None:
+            self.status.content = "no simulation yet"
+            return
+        t = sim.sim_time if t is None else t
+        frame = len(sim.timeline) - 1 if frame is None else frame
+        state = "paused" if self._paused else ("running" if self.busy else "idle")
+        if self._scrubbed is not None:
+            state = "timeline (scrubbing)"
+        red = sorted(self.scene.red) if self.scene is not None else []
+        hit = f" · contact: {', '.join(red)}" if red else ""
+        self.status.content = (
+            f"**t = {t:.3f} s** · frame {frame} of {len(sim.timeline) - 1} · {state}{hit}"
+        )
+
+    def refresh(self, *, live: bool = False) -> None:
+        """Redraw everything from the simulator: state, events, report, paths, inputs."""
+        sim = self.sim
+        if sim is None or self._closed:
+            return
+        self._push(len(sim.timeline) - 1, sim.sim_time)
+        self._events()
+        self._draw_paths()
+        self.jog.sync()
+        if not live:
+            self._status()
+
+    def _events(self) -> None:
+        sim = self.sim
+        assert sim is not None
+        evs = sim.events
+        rows = []
+        for e in evs[-_EVENTS_SHOWN:]:
+            text = f"{e.t:.3f} s · {e.robot or 'cell'} · {e.kind}: {e.detail}"
+            rows.append(f"- <span style='color:#d01010'>{text}</span>" if e.kind in
+                        ("collision", "error") else f"- {text}")  # fmt: skip
+        more = f"\n\n({len(evs) - _EVENTS_SHOWN} earlier)" if len(evs) > _EVENTS_SHOWN else ""
+        self.events_md.content = "\n".join(rows) + more if rows else "no events yet"
+        options = ["-", *(_event_label(i, e) for i, e in enumerate(evs))][-200:]
+        self.event_choice.options = tuple(options)
+        from workcell.sim.cycle import format_table
+
+        self.cycle_md.content = "```\n" + format_table(sim.cycle_time()) + "\n```"
+
+    def _draw_paths(self) -> None:
+        sim, scene = self.sim, self.scene
+        assert sim is not None
+        assert scene is not None
+        if not self.paths_box.value:
+            for h in scene.paths.values():
+                h.visible = False
+            return
+        n = len(sim.timeline)
+        for i, robot in enumerate(sim.robots):
+            done, pts = self._paths.get(robot, (0, []))
+            if done > n:
+                done, pts = 0, []
+            site = sim._site[robot]
+            d = self._scratch
+            for start, rows in sim.timeline.iter_blocks(done):
+                for row in rows:
+                    d.qpos[:] = row[2:]
+                    mujoco.mj_kinematics(sim.model, d)
+                    p = d.site_xpos[site].copy()
+                    if not pts or np.linalg.norm(p - pts[-1]) >= _PATH_STEP:
+                        pts.append(p)
+                del start
+            self._paths[robot] = (n, pts)
+            scene.set_path(robot, np.array(pts).reshape(-1, 3), PALETTE[i % len(PALETTE)])
+
+    # ------------------------------------------------------------------ timeline
+    def show_frame(self, frame: int) -> None:
+        """Show frame ``frame`` of the timeline (the simulator's state is not changed)."""
+        sim = self.sim
+        assert sim is not None
+        assert self._scratch is not None
+        n = len(sim.timeline)
+        if not 0 <= frame < n:
+            raise ProgramError(f"show_frame: frame must be 0 ... {n - 1}, got {frame!r}")
+        t, _, q = sim.timeline.frame(frame)
+        d = self._scratch
+        d.qpos[:] = q
+        mujoco.mj_kinematics(sim.model, d)
+        mujoco.mj_collision(sim.model, d)
+        self._push(frame, t, d)
+        self._status(t, frame)
+
+    def _slider_moved(self, event: Any) -> None:
+        if event.client is None or self.sim is None:
+            return
+        frame = int(self.slider.value)
+        if self.busy:
+            return
+        if frame >= len(self.sim.timeline) - 1:
+            self.refresh()
+        else:
+            self.show_frame(frame)
+
+    def _event_chosen(self, event: Any) -> None:
+        if event.client is None or self.sim is None or self.event_choice.value == "-":
+            return
+        k = int(self.event_choice.value.split(" ", 1)[0].lstrip("#"))
+        evs = self.sim.events
+        if 0 <= k < len(evs) and not self.busy:
+            self.show_frame(max(0, min(evs[k].frame, len(self.sim.timeline) - 1)))
+
+
+def _event_label(i: int, e: Event) -> str:
+    text = f"#{i} {e.t:.3f} s {e.kind} {e.robot or ''}: {e.detail}"
+    return text if len(text) <= 90 else text[:87] + "..."
+
+
+def _reach(robot: Any) -> float:
+    """A robot's reach (m): the farthest tool point from its base over sampled poses."""
+    lo, hi = np.asarray(robot.lower), np.asarray(robot.upper)
+    lo, hi = np.where(np.isfinite(lo), lo, -math.pi), np.where(np.isfinite(hi), hi, math.pi)
+    Q = lo + np.random.default_rng(0).random((64, len(lo))) * (hi - lo)
+    T = robot.fk_batch(Q)
+    return float(max(0.3, np.max(np.linalg.norm(T[:, :3, 3], axis=1))))
