@@ -22,6 +22,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "workcell.program.cli",
     "workcell.robots.cli",
     "workcell.study.cli",
+    "workcell.view.cli",
 )
 
 

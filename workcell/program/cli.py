@@ -41,7 +41,14 @@ def _start(args: argparse.Namespace) -> Any:
 def _shell(args: argparse.Namespace) -> int:
     from workcell.program.shell import run_shell
 
-    return run_shell(_start(args)(), history=args.history, echo=args.echo)
+    session = _start(args)()
+    if not args.view:
+        return run_shell(session, history=args.history, echo=args.echo)
+    from workcell.view.cli import viewer_of
+
+    with viewer_of(args, session.sim, "view_") as viewer:  # the live view (workcell.view)
+        viewer.follow(session)
+        return run_shell(session, history=args.history, echo=args.echo)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -114,6 +121,17 @@ def _serve(args: argparse.Namespace) -> int:
     token = args.token or os.environ.get("WORKCELL_TOKEN") or None
     make = _start(args)
     make()  # a bad --cell or --mode fails here, not at each client's connection
+    viewer = None
+    if args.view:  # the live view shows the session that ran a command last
+        from workcell.view.cli import viewer_of
+
+        viewer = viewer_of(args, None, "view_", control=args.view_control, root=args.root)
+        plain = make
+
+        def make() -> Any:
+            session = plain()
+            viewer.follow(session)
+            return session
     server = Server(
         args.host,
         args.port,
@@ -138,6 +156,8 @@ def _serve(args: argparse.Namespace) -> int:
         pass
     finally:
         server.server_close()
+        if viewer is not None:
+            viewer.close()
     return 0
 
 
@@ -147,6 +167,14 @@ def _session_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--example", choices=tuple(CELLS), help="start with a thesis example cell")
     p.add_argument("--mode", choices=_MODES, help="also start simulating in this mode")
     p.add_argument("--dt", type=float, default=0.01, metavar="SECONDS", help="sampling (0.01)")
+
+
+def _view_options(p: argparse.ArgumentParser) -> None:
+    from workcell.view.cli import add_view_options
+
+    p.add_argument("--view", action="store_true",
+                   help="also show the session live in a web page (prints its URL)")  # fmt: skip
+    add_view_options(p, "view-")
 
 
 def register(sub: Any) -> None:
@@ -161,6 +189,7 @@ def register(sub: Any) -> None:
     _session_options(shell)
     shell.add_argument("--history", metavar="FILE", help="history file (~/.workcell_history)")
     shell.add_argument("--echo", action="store_true", help="print each line read (transcripts)")
+    _view_options(shell)
     shell.set_defaults(func=_shell)
 
     run = sub.add_parser(
@@ -232,6 +261,9 @@ def register(sub: Any) -> None:
         "--shared", action="store_true", help="one session for all clients (serialised)"
     )
     _session_options(serve)
+    _view_options(serve)
+    serve.add_argument("--view-control", action="store_true",
+                       help="with --view: the page may jog, teach and run (default: watch only)")  # fmt: skip
     serve.set_defaults(func=_serve)
 
 

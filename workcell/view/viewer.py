@@ -161,6 +161,24 @@ class Viewer:
         sim.event_listeners.append(self._on_event)
         self.refresh()
 
+    def follow(self, session: Any) -> None:
+        """Show what ``session`` (a command-language session) runs: its commands take
+        :attr:`lock` (so the page waits for them), and a simulator the session starts
+        (``simulate``) replaces the one shown."""
+        inner = session.execute
+
+        def execute(command: Any) -> Any:
+            with self.lock:
+                try:
+                    return inner(command)
+                finally:
+                    if session.sim is not None and session.sim is not self.sim:
+                        self.attach(session.sim)
+
+        session.execute = execute
+        if session.sim is not None:
+            self.attach(session.sim)
+
     def _detach(self) -> None:
         sim = self.sim
         if sim is None:

@@ -1,0 +1,114 @@
+"""``workcell view``: the live view of a cell (and a recording in rerun's web viewer).
+
+``workcell view CELL.json|EXAMPLE [--program FILE.wcl] [--host H] [--port N]`` loads
+the cell, starts a simulator and the live view (:class:`workcell.view.Viewer`) and
+prints the page's URL. With ``--program`` it waits for a page to open (``--no-wait``:
+not), runs the program there for the page to show, then keeps the page up for jogging,
+teaching and scrubbing until Ctrl-C.
+
+``workcell view FILE.rrd`` serves a recording in rerun's web viewer (``rerun
+--serve-web``, on ``--host``, default loopback) and prints the URL to open (with
+``renderer=webgl``, which works where the browser has no WebGPU); Ctrl-C stops it.
+
+Top-level imports stay light (``workcell --help`` imports this module).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import Any
+
+from workcell.examples import CELL_HELP
+
+__all__ = ["add_view_options", "register", "viewer_of"]
+
+
+def add_view_options(p: argparse.ArgumentParser, prefix: str = "") -> None:
+    """--host/--port/--speed (or --view-host ... when ``prefix`` is "view-")."""
+    p.add_argument(f"--{prefix}host", default="127.0.0.1",
+                   help="address the page is served on (127.0.0.1: this machine only)")  # fmt: skip
+    p.add_argument(f"--{prefix}port", type=int, default=0, metavar="N",
+                   help="port of the page (0: any free one)")  # fmt: skip
+    p.add_argument(f"--{prefix}speed", type=float, default=1.0, metavar="X",
+                   help="show motions at X times real time (1); 0: only each command's end")  # fmt: skip
+
+
+def viewer_of(args: argparse.Namespace, sim: Any, prefix: str = "", **kw: Any) -> Any:
+    """A Viewer as the options ask; prints its URL."""
+    from workcell.view import Viewer
+
+    get = lambda name: getattr(args, f"{prefix}{name}")  # noqa: E731
+    speed = get("speed")
+    v = Viewer(sim, host=get("host"), port=get("port"), speed=speed or None, **kw)
+    print(f"live view: {v.url}  (open it in a browser; Ctrl-C stops)", flush=True)
+    return v
+
+
+def _serve_until_interrupted() -> int:
+    try:
+        while True:
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        return 0
+
+
+def _view(args: argparse.Namespace) -> int:
+    if args.cell.endswith(".rrd"):
+        from workcell.view.recording import serve_recording
+
+        return serve_recording(args.cell, host=args.host, port=args.port)
+    from workcell.errors import ProgramError
+    from workcell.examples import load_cell
+    from workcell.sim import Simulator
+
+    if args.program and not Path(args.program).is_file():
+        raise ProgramError(f"--program: no file {args.program!r}")
+    sim = Simulator(load_cell(args.cell), mode=args.mode, dt=args.dt)
+    viewer = viewer_of(args, sim, root=args.root)
+    try:
+        if args.program:
+            from workcell.program.interpreter import run_script
+            from workcell.program.session import Session
+
+            if not args.no_wait:
+                print("waiting for a page to open the URL ...", flush=True)
+                while viewer.clients == 0:
+                    time.sleep(0.1)
+            session = Session(sim=sim, base_dir=Path(args.program).parent, root=args.root)
+            viewer.follow(session)
+            try:
+                run_script(args.program, session)
+            except Exception as exc:
+                from workcell.errors import WorkcellError
+
+                if not isinstance(exc, WorkcellError):
+                    raise
+                sim._log_error(exc)
+                print(f"workcell: {type(exc).__name__}: {exc}", flush=True)
+            print(f"program done: t = {sim.sim_time:.4f} s; the page stays up", flush=True)
+        return _serve_until_interrupted()
+    finally:
+        viewer.close()
+
+
+def register(sub: Any) -> None:
+    """Add ``view`` to the argparse subparsers ``sub``."""
+    p = sub.add_parser(
+        "view",
+        help="the live view of a cell in a web page (jog, teach, run, watch), or a "
+        "recording (.rrd) in rerun's web viewer",
+        description="Serve the cell as a live web page and print its URL (with the token "
+        "it needs). Loopback only unless --host says otherwise.",
+    )
+    p.add_argument("cell", metavar="CELL", help=CELL_HELP + "; or a recording FILE.rrd")
+    p.add_argument("--program", metavar="FILE.wcl", help="run this program for the page")
+    p.add_argument("--no-wait", action="store_true",
+                   help="with --program: run at once, without waiting for a page")  # fmt: skip
+    p.add_argument("--mode", choices=("path", "joint-by-joint", "playback"), default="path")
+    p.add_argument("--dt", type=float, default=0.01, metavar="SECONDS", help="sampling (0.01)")
+    p.add_argument("--root", default=".", metavar="DIR",
+                   help="the folder the page saves programs in (the current one)")  # fmt: skip
+    add_view_options(p)
+    p.set_defaults(func=_view)
