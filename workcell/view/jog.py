@@ -163,7 +163,11 @@ class JogPanel:
         v = self.viewer
         try:
             with v.lock:
-                v.sim.jog(robot, q)
+                v._own = True
+                try:
+                    v.sim.jog(robot, q)
+                finally:
+                    v._own = False
         except WorkcellError as exc:
             v.notify(f"{robot}: not moved", str(exc), client, error=True)
             self.sync()

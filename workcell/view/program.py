@@ -64,7 +64,7 @@ class ProgramPanel:
         ro = not viewer.control
         self.folder = gui.add_folder("Program", expand_by_default=False)
         with self.folder:
-            self.robot = gui.add_dropdown("teach robot", tuple(sim.robots), disabled=ro)
+            self.robot = gui.add_dropdown("teach robot", tuple(sim.robots) or ("-",), disabled=ro)
             self.kind = gui.add_dropdown("teach as", ("joints", "linear"), disabled=ro)
             self.speed = gui.add_number("linear speed (m/s)", 0.25, min=0.001, max=5.0,
                                         step=0.001, disabled=ro)  # fmt: skip

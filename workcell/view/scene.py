@@ -194,7 +194,11 @@ class Scene:
         h = self.paths.get(robot)
         if h is None:
             self.paths[robot] = self.server.scene.add_line_segments(
-                f"/paths/{robot}", points=seg, colors=colour, line_width=2.0
+                f"/paths/{robot}",
+                points=seg,
+                colors=colour,
+                thickness=2.0,
+                thickness_units="screen",
             )
         else:
             h.points = seg

@@ -93,6 +93,8 @@ class Viewer:
         self._anchor: tuple[float, float] | None = None  # (wall, sim time) of pacing
         self._last_push = 0.0
         self._last_frame = 0.0
+        self._own = False  # the page's own jog is running (its frames are not 'busy')
+        self._commands = 0  # commands of a followed session running now
         self._scrubbed: int | None = None
         self._views: dict[str, View] = {}
         self._paths: dict[str, tuple[int, list[np.ndarray]]] = {}
@@ -127,8 +129,9 @@ class Viewer:
 
     @property
     def busy(self) -> bool:
-        """True while a command is running (a frame was applied less than 0.25 s ago)."""
-        return time.perf_counter() - self._last_frame < _BUSY_GAP
+        """True while a command is running: a followed session's, or one whose frame was
+        applied less than 0.25 s ago (not the page's own jogs)."""
+        return self._commands > 0 or time.perf_counter() - self._last_frame < _BUSY_GAP
 
     def attach(self, sim: Simulator) -> None:
         """Show ``sim`` (another simulator than before: the scene is rebuilt)."""
@@ -138,6 +141,10 @@ class Viewer:
         self.sim = sim
         self.server.scene.reset()
         self.server.scene.set_up_direction("+z")
+        # plain lights (no environment map to load and fade in): steady colours at once
+        self.server.scene.configure_environment_map(None)
+        self.server.scene.add_light_hemisphere("/lights/sky", sky_color=(255, 255, 255),
+                                               ground_color=(120, 120, 130), intensity=2.0)  # fmt: skip
         cc, m = sim.compiled, sim.model
         bases = {r: p.world_base for r, p in sim.cell.robots.items()}
         self.scene = Scene(self.server, m, sim.data, labels=sim.contacts.labels,
@@ -169,9 +176,11 @@ class Viewer:
 
         def execute(command: Any) -> Any:
             with self.lock:
+                self._commands += 1
                 try:
                     return inner(command)
                 finally:
+                    self._commands -= 1
                     if session.sim is not None and session.sim is not self.sim:
                         self.attach(session.sim)
 
@@ -258,7 +267,8 @@ class Viewer:
         if self._clients == 0 or self._closed:
             return
         now = time.perf_counter()
-        self._last_frame = now
+        if not self._own:
+            self._last_frame = now
         if self._paused:
             self._wait_resumed()
             now = time.perf_counter()
