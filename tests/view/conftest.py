@@ -69,12 +69,12 @@ def quiet_scene(viewer) -> None:
 
 
 def screenshot(page) -> np.ndarray:
-    """The page as an RGB array (HEIGHT, WIDTH, 3)."""
+    """The page as an RGB array (HEIGHT, WIDTH, 3) of ints (no uint8 wrap-around)."""
     import io
 
     from PIL import Image
 
-    return np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB"))
+    return np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB")).astype(int)
 
 
 def panel_left(page) -> int:

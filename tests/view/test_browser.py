@@ -59,7 +59,8 @@ def test_page_draws_the_cell_where_mujoco_does(page):
         view = v._views["overview"]
     from PIL import Image
 
-    half = np.asarray(Image.fromarray(shot).resize((MJ_W, MJ_H), Image.BILINEAR)).astype(int)
+    small = Image.fromarray(shot.astype(np.uint8)).resize((MJ_W, MJ_H), Image.BILINEAR)
+    half = np.asarray(small).astype(int)
     chroma = half.max(axis=2) - half.min(axis=2)
     page_grey = chroma < GREY
     labels = mujoco_labels(sim, view)
@@ -227,6 +228,9 @@ def test_a_collision_turns_the_part_red(page):
         view = View(c + np.array([0.0, -0.45, 0.12]), c, np.array([0.0, 0.0, 1.0]),
                     math.radians(45))  # fmt: skip
         v._apply_view(view, None)
+        for g in v.jog.gizmos.values():  # red x arrows of the gizmos and axes: away
+            g.visible = False
+        v.server.scene.add_frame("/axes", show_axes=False, visible=False)
         page.wait_for_timeout(1500)
         w, h = page.viewport_size["width"], page.viewport_size["height"]
         x, y = (round(a) for a in _project(view, c, w, h))

@@ -114,6 +114,8 @@ class Scene:
                 color=colour,
                 opacity=None if rgba[3] >= 1 else float(rgba[3]),
                 flat_shading=True,
+                cast_shadow=False,
+                receive_shadow=False,
                 position=model.geom_pos[g].copy(),
                 wxyz=model.geom_quat[g].copy(),
             )
@@ -137,7 +139,10 @@ class Scene:
             for i in range(_MARKERS)
         ]  # fmt: skip
         self.paths: dict[str, viser.LineSegmentsHandle] = {}
-        self._red: set[int] = set()
+        self._red: set[str] = set()
+        self._marked = False
+        self._ids = np.array(self.moving, dtype=np.intp)
+        self._shown = np.full((len(self._ids), 7), np.nan)  # poses sent: xpos, xquat
 
     def _floor(self, model: mujoco.MjModel, g: int, extent: float) -> None:
         size = model.geom_size[g]
@@ -158,26 +163,33 @@ class Scene:
     def show(self, data: mujoco.MjData, contacts: list[Contact] | None = None) -> None:
         """Pose the moving bodies and tool axes from ``data``; paint the things in
         ``contacts`` red and mark the contact points (deepest first) with their depth."""
+        ids = self._ids
+        pose = np.concatenate([data.xpos[ids], data.xquat[ids]], axis=1)
+        moved = np.flatnonzero(np.any(pose != self._shown, axis=1))
+        self._shown[moved] = pose[moved]
         with self.server.atomic():
-            for b in self.moving:
-                f = self.frames[b]
-                f.position = data.xpos[b]
-                f.wxyz = data.xquat[b]
+            for k in moved:  # only what moved since the last picture (a message each)
+                f = self.frames[int(ids[k])]
+                f.position = pose[k, :3]
+                f.wxyz = pose[k, 3:]
             for r, h in self.tools.items():
                 s = self.tool_sites[r]
-                h.position = data.site_xpos[s]
-                h.wxyz = _wxyz(data.site_xmat[s].reshape(3, 3))
+                if np.any(h.position != data.site_xpos[s]):
+                    h.position = data.site_xpos[s]
+                    h.wxyz = _wxyz(data.site_xmat[s].reshape(3, 3))
             contacts = contacts or []
             red = {x for c in contacts for x in (c.a, c.b)} & set(self.meshes)
             for label in self._red ^ red:
                 for h, colour in self.meshes[label]:
                     h.color = COLLISION_RGB if label in red else colour
             self._red = red
-            for i, (ball, text) in enumerate(self.markers):
-                if i < len(contacts):
-                    ball.position = contacts[i].point
-                    text.text = f"{contacts[i].depth * 1e3:.3g} mm"
-                ball.visible = text.visible = i < len(contacts)
+            if contacts or self._marked:
+                for i, (ball, text) in enumerate(self.markers):
+                    if i < len(contacts):
+                        ball.position = contacts[i].point
+                        text.text = f"{contacts[i].depth * 1e3:.3g} mm"
+                    ball.visible = text.visible = i < len(contacts)
+            self._marked = bool(contacts)
 
     @property
     def red(self) -> set[str]:

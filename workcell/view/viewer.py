@@ -53,6 +53,7 @@ __all__ = ["PALETTE", "Viewer"]
 
 PALETTE = [(230, 80, 40), (40, 120, 230), (40, 170, 80), (200, 60, 200), (220, 180, 30)]
 _PUSH_INTERVAL = 1.0 / 60.0  # s between two pictures sent to the page while running
+_PANELS_INTERVAL = 0.25  # s between two redraws of events, report, paths, inputs
 _BUSY_GAP = 0.25  # s after the last frame during which a command counts as running
 _EVENTS_SHOWN = 14
 _PATH_STEP = 1e-3  # m: tool path points closer than this to the last one are dropped
@@ -99,7 +100,12 @@ class Viewer:
         self._views: dict[str, View] = {}
         self._paths: dict[str, tuple[int, list[np.ndarray]]] = {}
         self._scratch: mujoco.MjData | None = None
+        self._dirty = threading.Event()
+        self._pending: tuple[int, float, np.ndarray] | None = None
+        self._panels_at = 0.0
+        self._paint_data: mujoco.MjData | None = None
         self._build_page()
+        threading.Thread(target=self._paint, daemon=True, name="workcell-view").start()
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
         if sim is not None:
@@ -138,11 +144,15 @@ class Viewer:
         if sim is self.sim:
             return
         self._detach()
+        for panel in getattr(self, "_panels", []):
+            panel.remove()
+        self._panels = []
         self.sim = sim
         self.server.scene.reset()
         self.server.scene.set_up_direction("+z")
         # plain lights (no environment map to load and fade in): steady colours at once
         self.server.scene.configure_environment_map(None)
+        self.server.scene.configure_default_lights(cast_shadow=False)  # shadows: 10x the work
         self.server.scene.add_light_hemisphere("/lights/sky", sky_color=(255, 255, 255),
                                                ground_color=(120, 120, 130), intensity=2.0)  # fmt: skip
         cc, m = sim.compiled, sim.model
@@ -155,12 +165,11 @@ class Viewer:
         self.camera_choice.value = "overview"
         self._apply_view(self._views["overview"], None)
         self._scratch = mujoco.MjData(m)
+        self._paint_data = mujoco.MjData(m)
         self._paths = {}
         from workcell.view.jog import JogPanel
         from workcell.view.program import ProgramPanel
 
-        for panel in getattr(self, "_panels", []):
-            panel.remove()
         self.jog = JogPanel(self)
         self.program = ProgramPanel(self)
         self._panels = [self.jog, self.program]
@@ -297,29 +306,76 @@ class Viewer:
         self._anchor = None
 
     def _on_event(self, event: Event) -> None:
-        """Event listener: show the command's end state, the events, the report."""
+        """Event listener: show the command's end state now; the event list, the report,
+        the paths and the inputs follow from the painter thread."""
         if self._clients == 0 or self._closed:
             return
         self._anchor = None
-        self.refresh(live=True)
+        sim = self.sim
+        assert sim is not None
+        # the state at the event, drawn by the painter (the program does not wait for it)
+        self._pending = (len(sim.timeline) - 1, sim.sim_time, sim.data.qpos.copy())
+        self._dirty.set()
+
+    def _paint(self) -> None:
+        """The painter thread: redraws the panels a moment after events (off the
+        program's thread, so a program never waits for them), and the run state."""
+        shown = ""
+        while not self._closed:
+            if self._dirty.wait(0.3):
+                self._dirty.clear()
+                pending, self._pending = self._pending, None
+                try:
+                    if pending is not None:
+                        self._push_state(*pending)
+                    wait = _PANELS_INTERVAL * (4 if self.busy else 1)  # less while running
+                    if time.perf_counter() - self._panels_at > wait:
+                        self._panels_from_sim()
+                        self._panels_at = time.perf_counter()
+                    else:
+                        self._dirty.set()  # the panels a little later
+                        time.sleep(_PUSH_INTERVAL)
+                except Exception:  # the program changed the timeline meanwhile: next time
+                    self._dirty.set()
+            state = "busy" if self.busy else "idle"
+            if state != shown and self.sim is not None and self._scrubbed is None:
+                self._status()
+                shown = state
 
     # ------------------------------------------------------------------ drawing
-    def _push(self, frame: int, t: float, data: mujoco.MjData | None = None) -> None:
-        """Send the state of ``data`` (default: the simulator's) as ``frame``."""
+    def _push_state(self, frame: int, t: float, qpos: np.ndarray) -> None:
+        """Show a recorded state (the painter's data; contacts computed again)."""
+        sim = self.sim
+        d = self._paint_data
+        if sim is None or d is None or len(qpos) != sim.model.nq:
+            return
+        d.qpos[:] = qpos
+        mujoco.mj_kinematics(sim.model, d)
+        if sim.check_collisions:
+            mujoco.mj_collision(sim.model, d)
+        else:
+            d.ncon = 0
+        self._push(frame, t, d, live=True)
+
+    def _push(self, frame: int, t: float, data: mujoco.MjData | None = None, *,
+              live: bool = False) -> None:  # fmt: skip
+        """Send the state of ``data`` (default: the simulator's) as ``frame``; ``live``:
+        the simulator's state (not a scrubbed frame of the past)."""
         sim = self.sim
         assert sim is not None
         assert self.scene is not None
         d = sim.data if data is None else data
         touching = contacts(sim.contacts, d) if (sim.check_collisions or data is not None) else []
         self.scene.show(d, touching)
-        self._scrubbed = None if data is None else frame
+        live = live or data is None
+        self._scrubbed = None if live else frame
         self._last_push = time.perf_counter()
         self.pushes += 1
         with self.server.atomic():
             self.slider.max = max(1, len(sim.timeline) - 1, frame)
             self.slider.value = frame
             self._status(t, frame)
-            if data is None:
+            if live:
                 self.jog.follow()
 
     def _status(self, t: float | None = None, frame: int | None = None) -> None:
@@ -338,17 +394,22 @@ class Viewer:
             f"**t = {t:.3f} s** · frame {frame} of {len(sim.timeline) - 1} · {state}{hit}"
         )
 
-    def refresh(self, *, live: bool = False) -> None:
+    def refresh(self) -> None:
         """Redraw everything from the simulator: state, events, report, paths, inputs."""
         sim = self.sim
         if sim is None or self._closed:
             return
         self._push(len(sim.timeline) - 1, sim.sim_time)
-        self._events()
-        self._draw_paths()
-        self.jog.sync()
-        if not live:
-            self._status()
+        self._panels_from_sim()
+
+    def _panels_from_sim(self) -> None:
+        """Events, cycle-time report, tool paths and jog inputs from the simulator."""
+        if self.sim is None or self._closed:
+            return
+        with self.server.atomic():
+            self._events()
+            self._draw_paths()
+            self.jog.sync()
 
     def _events(self) -> None:
         sim = self.sim
@@ -368,6 +429,8 @@ class Viewer:
         self.cycle_md.content = "```\n" + format_table(sim.cycle_time()) + "\n```"
 
     def _draw_paths(self) -> None:
+        """Tool paths: the tool points of every frame so far (the robots' FK of the
+        timeline's joints), a point per millimetre of path."""
         sim, scene = self.sim, self.scene
         assert sim is not None
         assert scene is not None
@@ -380,16 +443,11 @@ class Viewer:
             done, pts = self._paths.get(robot, (0, []))
             if done > n:
                 done, pts = 0, []
-            site = sim._site[robot]
-            d = self._scratch
-            for start, rows in sim.timeline.iter_blocks(done):
-                for row in rows:
-                    d.qpos[:] = row[2:]
-                    mujoco.mj_kinematics(sim.model, d)
-                    p = d.site_xpos[site].copy()
-                    if not pts or np.linalg.norm(p - pts[-1]) >= _PATH_STEP:
-                        pts.append(p)
-                del start
+            if done < n:
+                placement = sim.cell.robots[robot]
+                Q = sim.timeline.qpos(done, n)[:, sim._qadr[robot]]
+                P = (placement.base @ placement.robot.fk_batch(Q))[:, :3, 3]
+                pts = [*pts, *_thin(P, pts[-1] if pts else None)]
             self._paths[robot] = (n, pts)
             scene.set_path(robot, np.array(pts).reshape(-1, 3), PALETTE[i % len(PALETTE)])
 
@@ -428,6 +486,20 @@ class Viewer:
         evs = self.sim.events
         if 0 <= k < len(evs) and not self.busy:
             self.show_frame(max(0, min(evs[k].frame, len(self.sim.timeline) - 1)))
+
+
+def _thin(P: np.ndarray, last: np.ndarray | None) -> list[np.ndarray]:
+    """Points of P (k, 3) a path length of _PATH_STEP or more apart, after ``last``."""
+    if len(P) == 0:
+        return []
+    start = P[0] if last is None else last
+    seg = np.linalg.norm(np.diff(np.vstack([start, P]), axis=0), axis=1)
+    steps = np.floor(np.cumsum(seg) / _PATH_STEP)
+    keep = np.flatnonzero(np.diff(np.concatenate([[0.0], steps])) > 0)
+    out = [P[k] for k in keep]
+    if last is None:
+        out.insert(0, P[0])
+    return out
 
 
 def _event_label(i: int, e: Event) -> str:
