@@ -132,6 +132,7 @@ def _serve(args: argparse.Namespace) -> int:
             session = plain()
             viewer.follow(session)
             return session
+
     server = Server(
         args.host,
         args.port,

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from workcell.meshgeoms import COLLISION_GROUP
 
-__all__ = ["AZIMUTH_STEP", "occlusion", "overview_camera", "visual_points"]
+__all__ = ["AZIMUTH_STEP", "camera_eye", "occlusion", "overview_camera", "visual_points"]
 
 AZIMUTH_STEP = 30.0  # deg between the azimuths tried
 _MOVABLE_WEIGHT = 10.0  # a hidden movable part costs as much as ten static ones
@@ -178,3 +178,12 @@ def overview_camera(
     cam.distance = d
     cam.azimuth, cam.elevation = azimuth % 360.0, elevation
     return cam
+
+
+def camera_eye(cam: mujoco.MjvCamera) -> tuple[Array, Array]:
+    """A free camera's eye point and look-at point (m, world): the eye sits ``distance``
+    behind the look-at point along the viewing direction given by azimuth and elevation."""
+    az, el = math.radians(cam.azimuth), math.radians(cam.elevation)
+    forward = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    look = np.array(cam.lookat, dtype=np.float64)
+    return look - cam.distance * forward, look

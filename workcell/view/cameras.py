@@ -18,7 +18,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from workcell.record.camera import overview_camera
+from workcell.record.camera import camera_eye, overview_camera
 
 __all__ = ["View", "free_camera_view", "presets"]
 
@@ -35,12 +35,9 @@ class View(NamedTuple):
 
 
 def free_camera_view(cam: mujoco.MjvCamera, fovy_deg: float) -> View:
-    """MuJoCo's free camera as a View (eye = look-at - distance x forward)."""
-    az, el = math.radians(cam.azimuth), math.radians(cam.elevation)
-    forward = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
-    look = np.array(cam.lookat, dtype=np.float64)
-    return View(look - cam.distance * forward, look, np.array([0.0, 0.0, 1.0]),
-                math.radians(fovy_deg))  # fmt: skip
+    """MuJoCo's free camera as a View (:func:`~workcell.record.camera.camera_eye`)."""
+    eye, look = camera_eye(cam)
+    return View(eye, look, np.array([0.0, 0.0, 1.0]), math.radians(fovy_deg))
 
 
 def presets(model: mujoco.MjModel, data: mujoco.MjData, bases: dict[str, Array],
