@@ -148,3 +148,32 @@ def test_workcell_view_runs_a_program_and_prints_the_url(tmp_path):
     finally:
         child.terminate()
         child.wait(10)
+
+
+def test_workcell_view_serves_a_recording_in_rerun_web_viewer(tmp_path):
+    from workcell.record import record
+
+    sim = new_sim()
+    move_by(sim, 0.3)
+    record(sim, tmp_path / "run.rrd")
+    cmd = [sys.executable, "-m", "workcell.cli", "view", "run.rrd"]
+    child = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True, cwd=tmp_path)
+    try:
+        line = child.stdout.readline()
+        assert line.startswith("recording in the web viewer: http://127.0.0.1:")
+        url = line.split()[5]
+        assert url.endswith("&renderer=webgl")
+        import urllib.request
+
+        for _ in range(100):  # rerun's web server starts
+            try:
+                with urllib.request.urlopen(url, timeout=5) as r:
+                    assert r.status == 200
+                    break
+            except OSError:
+                time.sleep(0.1)
+        else:
+            raise AssertionError("rerun's web viewer did not answer")
+    finally:
+        child.terminate()
+        assert child.wait(10) == 0

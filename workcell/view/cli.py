@@ -54,7 +54,18 @@ def _serve_until_interrupted() -> int:
         return 0
 
 
+def _stop_on_sigterm() -> None:
+    """SIGTERM stops as Ctrl-C does (the page's server and rerun's child end cleanly)."""
+    import signal
+
+    def stop(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
+
+
 def _view(args: argparse.Namespace) -> int:
+    _stop_on_sigterm()
     if args.cell.endswith(".rrd"):
         from workcell.view.recording import serve_recording
 

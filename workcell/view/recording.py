@@ -9,7 +9,9 @@ and draws the gripper as a step signal (:mod:`workcell.record.rerun_log`).
 
 from __future__ import annotations
 
+import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -46,7 +48,10 @@ def serve_recording(path: str | Path, *, host: str = "127.0.0.1", port: int = 0)
     data = _free_port(host)
     cmd = [exe, "--serve-web", "--bind", host, "--web-viewer-port", str(web),
            "--port", str(data), str(p)]  # fmt: skip
-    child = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # its own process group: the 'rerun' command runs the viewer binary as a child, and
+    # both end with the group
+    child = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                             start_new_session=True)  # fmt: skip
     try:
         print(f"recording in the web viewer: {recording_url(host, web, data)}  (Ctrl-C stops)",
               flush=True)  # fmt: skip
@@ -56,9 +61,18 @@ def serve_recording(path: str | Path, *, host: str = "127.0.0.1", port: int = 0)
     except KeyboardInterrupt:
         return 0
     finally:
-        if child.poll() is None:
-            child.terminate()
-            try:
-                child.wait(5)
-            except subprocess.TimeoutExpired:
-                child.kill()
+        _end_group(child)
+
+
+def _end_group(child: subprocess.Popen) -> None:
+    """Stop the child's process group (SIGTERM, then SIGKILL after 5 s)."""
+    for sig in (signal.SIGTERM, signal.SIGKILL):
+        try:
+            os.killpg(child.pid, sig)
+        except ProcessLookupError:
+            return
+        try:
+            child.wait(5)
+            return
+        except subprocess.TimeoutExpired:
+            continue
