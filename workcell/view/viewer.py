@@ -128,6 +128,10 @@ class Viewer:
             self._resume.notify_all()
         stop_quietly(self.server)
 
+    def _repr_html_(self) -> str:
+        """In a notebook: the page's link."""
+        return f'<a href="{self.url}" target="_blank">workcell live view: {self.url}</a>'
+
     @property
     def clients(self) -> int:
         """Pages connected now."""
