@@ -177,3 +177,28 @@ def test_workcell_view_serves_a_recording_in_rerun_web_viewer(tmp_path):
     finally:
         child.terminate()
         assert child.wait(10) == 0
+
+
+def test_a_followed_session_is_shown_and_a_read_only_page_changes_nothing():
+    """The viewer follows a command-language session (the shell's, a server's): the
+    simulator that 'simulate' starts is the one shown; with control=False (the server's
+    default) the page's jog inputs are refused."""
+    session = Session()
+    with Viewer(None, speed=None, control=False) as v:
+        v.follow(session)
+        interp = Interpreter(session, lambda s: None)
+        interp.run_line("cell example pick-place")
+        assert v.sim is None
+        interp.run_line("simulate path dt 0.01")
+        assert v.sim is session.sim
+        interp.run_line("move joints relative puma 10 0 0 0 0 0")
+        assert v.sim.frames > 1
+        q = v.sim.joints("puma")
+
+        class Event:
+            client = object()
+
+        v.notify = lambda *a, **k: None
+        v.jog.inputs["puma"][0].value = 50.0  # as if typed on the page
+        v.jog._typed("puma", Event())
+        np.testing.assert_array_equal(v.sim.joints("puma"), q)

@@ -27,6 +27,7 @@ import contextlib
 import dataclasses
 import http
 import io
+import logging
 import secrets
 import threading
 from collections.abc import Callable
@@ -121,6 +122,7 @@ def start_server(host: str, port: int, guard: Guard) -> viser.ViserServer:
         websockets,
         asyncio=_View(websockets.asyncio, server=_View(websockets.asyncio.server, serve=serve)),
     )
+    logging.getLogger("websockets.server").setLevel(logging.WARNING)  # no line per listen
     with _LOCK, contextlib.redirect_stdout(io.StringIO()):
         saved = _infra.websockets
         _infra.websockets = view
