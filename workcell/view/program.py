@@ -74,7 +74,7 @@ class ProgramPanel:
             self.save_button = gui.add_button("Save", disabled=ro)
             self.buttons = gui.add_button_group("run", ("Run", "Step", "Stop"), disabled=ro)
             self.state = gui.add_markdown("")
-        self.teach_button.on_click(lambda e: self.teach(client=e.client))
+        self.teach_button.on_click(lambda e: self._teach(e.client))
         self.save_button.on_click(lambda e: self._save(e.client))
         self.buttons.on_click(self._pressed)
         self.text.on_update(lambda e: self._edited(e))
@@ -90,6 +90,8 @@ class ProgramPanel:
         sim = self.viewer.sim
         robot = self.robot.value if robot is None else robot
         kind = self.kind.value if kind is None else kind
+        if robot not in sim.robots:
+            raise ViewError(f"teach: no robot {robot!r}; robots: {', '.join(sim.robots) or 'none'}")
         name = f"p{len(self.targets) + 1}"
         line = teach_line(sim, robot, name, kind, float(self.speed.value))
         self.targets[name] = sim.tool_pose(robot)
@@ -97,6 +99,14 @@ class ProgramPanel:
         self.text.value = (text + "\n" if text else "") + line + "\n"
         self.viewer.notify("taught", f"{name}: {line.splitlines()[-1][:60]}", client)
         return name
+
+    def _teach(self, client: Any) -> None:
+        if not self.viewer.control:
+            return
+        try:
+            self.teach(client=client)
+        except WorkcellError as exc:
+            self.viewer.notify("not taught", str(exc), client, error=True)
 
     def save(self, name: str) -> str:
         """Write the program text to ``name`` inside the viewer's root; returns the path."""
