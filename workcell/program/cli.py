@@ -125,7 +125,8 @@ def _serve(args: argparse.Namespace) -> int:
     if args.view:  # the live view shows the session that ran a command last
         from workcell.view.cli import viewer_of
 
-        viewer = viewer_of(args, None, "view_", control=args.view_control, root=args.root)
+        viewer = viewer_of(args, None, "view_", announce=False, control=args.view_control,
+                           root=args.root)  # fmt: skip
         plain = make
 
         def make() -> Any:
@@ -151,6 +152,10 @@ def _serve(args: argparse.Namespace) -> int:
         f"files in {server.root}); Ctrl-C stops",
         flush=True,
     )
+    if viewer is not None:
+        from workcell.view.cli import announce_url
+
+        announce_url(viewer)
     try:
         server.serve_forever()
     except KeyboardInterrupt:

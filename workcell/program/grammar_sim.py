@@ -18,7 +18,7 @@ from typing import Any
 
 from workcell.program import simcommands as simc
 from workcell.program.grammar_cell import ADD, CELL
-from workcell.program.grammar_motion import MOVE, OVERRIDE, PROFILE, SPEED, robot_leaf
+from workcell.program.grammar_motion import JOG, MOVE, OVERRIDE, PROFILE, SPEED, robot_leaf
 from workcell.program.grammar_tasks import CLOSE, HANDOVER, OPEN, PICK, PLACE, PLANNING
 from workcell.program.keytree import Keys, Leaf, Node, Options, Seq, Set
 from workcell.program.params import Choice, Name, Number
@@ -84,6 +84,7 @@ BRANCHES: dict[str, Node] = {
     "pick": PICK,
     "place": PLACE,
     "handover": HANDOVER,
+    "jog": JOG,
     "wait": Seq(
         Number("seconds", "time", what="seconds"),
         Leaf(

@@ -18,6 +18,7 @@ commands in :mod:`~workcell.program.taskcommands`, read-backs in
 from __future__ import annotations
 
 from workcell.program.motioncommands import (
+    Jog,
     MoveCircular,
     MoveEndEffector,
     MoveJointsAbsolute,
@@ -77,6 +78,7 @@ __all__ = [
     "GripperPose",
     "Handover",
     "Held",
+    "Jog",
     "Joints",
     "MoveCircular",
     "MoveEndEffector",

@@ -11,13 +11,10 @@ inputs and its tool gizmo.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
-
-from workcell.sim.timeline import Event
 
 if TYPE_CHECKING:
     from workcell.sim.simulator import Simulator
@@ -26,13 +23,7 @@ __all__ = ["JogCommands"]
 
 
 class JogCommands:
-    """``jog`` and the listener lists (module doc)."""
-
-    @property
-    def event_listeners(self: Simulator) -> list[Callable[[Event], None]]:
-        """Callables ``f(event)`` called with each event as it is recorded (the
-        timeline's listener list; see :mod:`workcell.sim.frames` for frame listeners)."""
-        return self.timeline.listeners
+    """``jog`` (module doc)."""
 
     def jog(self: Simulator, robot: str, q: ArrayLike) -> None:
         """Set the robot's joints to ``q`` (rad, m for prismatic joints) at once: no

@@ -233,6 +233,7 @@ class Simulator(
         # f(frame, t) each time data shows a frame (observers: workcell.sim.frames)
         self.frame_listeners: list[Callable[[int, float], None]] = []
         self.timeline = Timeline(self.model.nq, memory_limit=memory_limit, spill_dir=spill_dir)
+        self.event_listeners = self.timeline.listeners  # f(event) as each event is recorded
         self.timeline.append(0.0, 0.0, self.data.qpos)
         if self.check_collisions:
             mujoco.mj_collision(m, self.data)

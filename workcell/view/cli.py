@@ -22,7 +22,7 @@ from typing import Any
 
 from workcell.examples import CELL_HELP
 
-__all__ = ["add_view_options", "register", "viewer_of"]
+__all__ = ["add_view_options", "announce_url", "register", "viewer_of"]
 
 
 def add_view_options(p: argparse.ArgumentParser, prefix: str = "") -> None:
@@ -35,15 +35,23 @@ def add_view_options(p: argparse.ArgumentParser, prefix: str = "") -> None:
                    help="show motions at X times real time (1); 0: only each command's end")  # fmt: skip
 
 
-def viewer_of(args: argparse.Namespace, sim: Any, prefix: str = "", **kw: Any) -> Any:
-    """A Viewer as the options ask; prints its URL."""
+def viewer_of(
+    args: argparse.Namespace, sim: Any, prefix: str = "", *, announce: bool = True, **kw: Any
+) -> Any:
+    """A Viewer as the options ask; prints its URL (unless ``announce`` is False)."""
     from workcell.view import Viewer
 
     get = lambda name: getattr(args, f"{prefix}{name}")  # noqa: E731
     speed = get("speed")
     v = Viewer(sim, host=get("host"), port=get("port"), speed=speed or None, **kw)
-    print(f"live view: {v.url}  (open it in a browser; Ctrl-C stops)", flush=True)
+    if announce:
+        announce_url(v)
     return v
+
+
+def announce_url(viewer: Any) -> None:
+    """Print the page's URL for the user."""
+    print(f"live view: {viewer.url}  (open it in a browser; Ctrl-C stops)", flush=True)
 
 
 def _serve_until_interrupted() -> int:
