@@ -53,7 +53,7 @@ def test_page_draws_the_cell_where_mujoco_does(page):
         open_view(page, v)
         quiet_scene(v)
         v.server.scene.set_background_image(np.full((8, 8, 3), (0, 200, 0), np.uint8))
-        page.wait_for_timeout(5000)  # the page fades its lighting in over a few seconds
+        page.wait_for_timeout(2500)  # the background and hidden nodes reach the picture
         shot = screenshot(page)
         right = panel_left(page)
         view = v._views["overview"]
