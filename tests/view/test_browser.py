@@ -10,7 +10,7 @@ import time
 import mujoco
 import numpy as np
 import pytest
-from conftest import open_view, panel_left, quiet_scene, screenshot
+from viewpage import open_view, panel_left, quiet_scene, screenshot
 
 from workcell.examples import thesis_handoff, thesis_pick_place
 from workcell.sim import Simulator

@@ -110,7 +110,7 @@ def test_show_frame_poses_the_scene_and_leaves_the_simulator():
         mujoco.mj_kinematics(sim.model, d)
         for b, frame in v.scene.frames.items():
             np.testing.assert_allclose(frame.position, d.xpos[b], atol=1e-12)
-        assert int(v.slider.value) == k
+        assert int(v.timeline_panel.slider.value) == k
         np.testing.assert_array_equal(sim.data.qpos, qpos)
         with pytest.raises(Exception, match="frame must be"):
             v.show_frame(sim.frames)

@@ -12,7 +12,7 @@ camera is MuJoCo's camera (it looks along its -z axis, its y axis up).
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import mujoco
 import numpy as np
@@ -20,7 +20,10 @@ from numpy.typing import NDArray
 
 from workcell.record.camera import camera_eye, overview_camera
 
-__all__ = ["View", "free_camera_view", "presets"]
+if TYPE_CHECKING:
+    from workcell.robots.robot import Robot
+
+__all__ = ["View", "free_camera_view", "presets", "reach"]
 
 Array = NDArray[np.float64]
 
@@ -63,3 +66,12 @@ def presets(model: mujoco.MjModel, data: mujoco.MjData, bases: dict[str, Array],
         out[f"camera {name}"] = View(eye, eye - R[:, 2], R[:, 1].copy(),
                                      math.radians(float(model.cam_fovy[c_id])))  # fmt: skip
     return out
+
+
+def reach(robot: Robot) -> float:
+    """A robot's reach (m): the farthest tool point from its base over sampled poses."""
+    lo, hi = np.asarray(robot.lower), np.asarray(robot.upper)
+    lo, hi = np.where(np.isfinite(lo), lo, -math.pi), np.where(np.isfinite(hi), hi, math.pi)
+    Q = lo + np.random.default_rng(0).random((64, len(lo))) * (hi - lo)
+    T = robot.fk_batch(Q)
+    return float(max(0.3, np.max(np.linalg.norm(T[:, :3, 3], axis=1))))

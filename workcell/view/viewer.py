@@ -27,7 +27,6 @@ server's default) makes the page read-only.
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 from pathlib import Path
@@ -39,24 +38,22 @@ import numpy as np
 from workcell.checks import is_finite_number
 from workcell.errors import ProgramError
 from workcell.sim.timeline import Event
-from workcell.view.cameras import View, presets
+from workcell.view.cameras import View, presets, reach
 from workcell.view.contacts import contacts
 from workcell.view.guard import LOOPBACK, Guard, new_token, start_server, stop_quietly
 from workcell.view.scene import Scene
+from workcell.view.timeline import TimelinePanel
 
 if TYPE_CHECKING:
     import viser
 
     from workcell.sim.simulator import Simulator
 
-__all__ = ["PALETTE", "Viewer"]
+__all__ = ["Viewer"]
 
-PALETTE = [(230, 80, 40), (40, 120, 230), (40, 170, 80), (200, 60, 200), (220, 180, 30)]
 _PUSH_INTERVAL = 1.0 / 60.0  # s between two pictures sent to the page while running
 _PANELS_INTERVAL = 0.25  # s between two redraws of events, report, paths, inputs
 _BUSY_GAP = 0.25  # s after the last frame during which a command counts as running
-_EVENTS_SHOWN = 14
-_PATH_STEP = 1e-3  # m: tool path points closer than this to the last one are dropped
 
 
 class Viewer:
@@ -98,8 +95,6 @@ class Viewer:
         self._commands = 0  # commands of a followed session running now
         self._scrubbed: int | None = None
         self._views: dict[str, View] = {}
-        self._paths: dict[str, tuple[int, list[np.ndarray]]] = {}
-        self._scratch: mujoco.MjData | None = None
         self._dirty = threading.Event()
         self._pending: tuple[int, float, np.ndarray] | None = None
         self._panels_at = 0.0
@@ -163,14 +158,13 @@ class Viewer:
         bases = {r: p.world_base for r, p in sim.cell.robots.items()}
         self.scene = Scene(self.server, m, sim.data, labels=sim.contacts.labels,
                            tool_sites=dict(sim._site), bases=bases)  # fmt: skip
-        reaches = {r: _reach(p.robot) for r, p in sim.cell.robots.items()}
+        reaches = {r: reach(p.robot) for r, p in sim.cell.robots.items()}
         self._views = presets(m, sim.data, bases, reaches, dict(cc.cameras))
         self.camera_choice.options = tuple(self._views)
         self.camera_choice.value = "overview"
         self._apply_view(self._views["overview"], None)
-        self._scratch = mujoco.MjData(m)
         self._paint_data = mujoco.MjData(m)
-        self._paths = {}
+        self.timeline_panel.reset(sim)
         from workcell.view.jog import JogPanel
         from workcell.view.program import ProgramPanel
 
@@ -220,16 +214,7 @@ class Viewer:
         self.pause_button.on_click(lambda e: self.set_paused(not self._paused))
         self.camera_choice = gui.add_dropdown("View", ("overview",), initial_value="overview")
         self.camera_choice.on_update(self._camera_chosen)
-        with gui.add_folder("Timeline"):
-            self.slider = gui.add_slider("frame", min=0, max=1, step=1, initial_value=0)
-            self.slider.on_update(self._slider_moved)
-            self.paths_box = gui.add_checkbox("tool paths", True)
-            self.paths_box.on_update(lambda e: self._draw_paths())
-            self.event_choice = gui.add_dropdown("go to event", ("-",), initial_value="-")
-            self.event_choice.on_update(self._event_chosen)
-            self.events_md = gui.add_markdown("no events yet")
-        with gui.add_folder("Cycle time", expand_by_default=False):
-            self.cycle_md = gui.add_markdown("")
+        self.timeline_panel = TimelinePanel(self)
 
     def notify(self, title: str, body: str, client: Any = None, *, error: bool = False) -> None:
         """A message on the page (one client's, or every page's)."""
@@ -376,8 +361,7 @@ class Viewer:
         self._last_push = time.perf_counter()
         self.pushes += 1
         with self.server.atomic():
-            self.slider.max = max(1, len(sim.timeline) - 1, frame)
-            self.slider.value = frame
+            self.timeline_panel.follow(frame, len(sim.timeline))
             self._status(t, frame)
             if live:
                 self.jog.follow()
@@ -411,110 +395,9 @@ class Viewer:
         if self.sim is None or self._closed:
             return
         with self.server.atomic():
-            self._events()
-            self._draw_paths()
+            self.timeline_panel.draw()
             self.jog.sync()
 
-    def _events(self) -> None:
-        sim = self.sim
-        assert sim is not None
-        evs = sim.events
-        rows = []
-        for e in evs[-_EVENTS_SHOWN:]:
-            text = f"{e.t:.3f} s · {e.robot or 'cell'} · {e.kind}: {e.detail}"
-            rows.append(f"- <span style='color:#d01010'>{text}</span>" if e.kind in
-                        ("collision", "error") else f"- {text}")  # fmt: skip
-        more = f"\n\n({len(evs) - _EVENTS_SHOWN} earlier)" if len(evs) > _EVENTS_SHOWN else ""
-        self.events_md.content = "\n".join(rows) + more if rows else "no events yet"
-        options = ["-", *(_event_label(i, e) for i, e in enumerate(evs))][-200:]
-        self.event_choice.options = tuple(options)
-        from workcell.sim.cycle import format_table
-
-        self.cycle_md.content = "```\n" + format_table(sim.cycle_time()) + "\n```"
-
-    def _draw_paths(self) -> None:
-        """Tool paths: the tool points of every frame so far (the robots' FK of the
-        timeline's joints), a point per millimetre of path."""
-        sim, scene = self.sim, self.scene
-        assert sim is not None
-        assert scene is not None
-        if not self.paths_box.value:
-            for h in scene.paths.values():
-                h.visible = False
-            return
-        n = len(sim.timeline)
-        for i, robot in enumerate(sim.robots):
-            done, pts = self._paths.get(robot, (0, []))
-            if done > n:
-                done, pts = 0, []
-            if done < n:
-                placement = sim.cell.robots[robot]
-                Q = sim.timeline.qpos(done, n)[:, sim._qadr[robot]]
-                P = (placement.base @ placement.robot.fk_batch(Q))[:, :3, 3]
-                pts = [*pts, *_thin(P, pts[-1] if pts else None)]
-            self._paths[robot] = (n, pts)
-            scene.set_path(robot, np.array(pts).reshape(-1, 3), PALETTE[i % len(PALETTE)])
-
-    # ------------------------------------------------------------------ timeline
     def show_frame(self, frame: int) -> None:
         """Show frame ``frame`` of the timeline (the simulator's state is not changed)."""
-        sim = self.sim
-        assert sim is not None
-        assert self._scratch is not None
-        n = len(sim.timeline)
-        if not 0 <= frame < n:
-            raise ProgramError(f"show_frame: frame must be 0 ... {n - 1}, got {frame!r}")
-        t, _, q = sim.timeline.frame(frame)
-        d = self._scratch
-        d.qpos[:] = q
-        mujoco.mj_kinematics(sim.model, d)
-        mujoco.mj_collision(sim.model, d)
-        self._push(frame, t, d)
-        self._status(t, frame)
-
-    def _slider_moved(self, event: Any) -> None:
-        if event.client is None or self.sim is None:
-            return
-        frame = int(self.slider.value)
-        if self.busy:
-            return
-        if frame >= len(self.sim.timeline) - 1:
-            self.refresh()
-        else:
-            self.show_frame(frame)
-
-    def _event_chosen(self, event: Any) -> None:
-        if event.client is None or self.sim is None or self.event_choice.value == "-":
-            return
-        k = int(self.event_choice.value.split(" ", 1)[0].lstrip("#"))
-        evs = self.sim.events
-        if 0 <= k < len(evs) and not self.busy:
-            self.show_frame(max(0, min(evs[k].frame, len(self.sim.timeline) - 1)))
-
-
-def _thin(P: np.ndarray, last: np.ndarray | None) -> list[np.ndarray]:
-    """Points of P (k, 3) a path length of _PATH_STEP or more apart, after ``last``."""
-    if len(P) == 0:
-        return []
-    start = P[0] if last is None else last
-    seg = np.linalg.norm(np.diff(np.vstack([start, P]), axis=0), axis=1)
-    steps = np.floor(np.cumsum(seg) / _PATH_STEP)
-    keep = np.flatnonzero(np.diff(np.concatenate([[0.0], steps])) > 0)
-    out = [P[k] for k in keep]
-    if last is None:
-        out.insert(0, P[0])
-    return out
-
-
-def _event_label(i: int, e: Event) -> str:
-    text = f"#{i} {e.t:.3f} s {e.kind} {e.robot or ''}: {e.detail}"
-    return text if len(text) <= 90 else text[:87] + "..."
-
-
-def _reach(robot: Any) -> float:
-    """A robot's reach (m): the farthest tool point from its base over sampled poses."""
-    lo, hi = np.asarray(robot.lower), np.asarray(robot.upper)
-    lo, hi = np.where(np.isfinite(lo), lo, -math.pi), np.where(np.isfinite(hi), hi, math.pi)
-    Q = lo + np.random.default_rng(0).random((64, len(lo))) * (hi - lo)
-    T = robot.fk_batch(Q)
-    return float(max(0.3, np.max(np.linalg.norm(T[:, :3, 3], axis=1))))
+        self.timeline_panel.show_frame(frame)
