@@ -100,7 +100,8 @@ class Viewer:
         self._panels_at = 0.0
         self._paint_data: mujoco.MjData | None = None
         self._build_page()
-        threading.Thread(target=self._paint, daemon=True, name="workcell-view").start()
+        self._painter = threading.Thread(target=self._paint, daemon=True, name="workcell-view")
+        self._painter.start()
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
         if sim is not None:
@@ -121,6 +122,8 @@ class Viewer:
         self._detach()
         with self._resume:
             self._resume.notify_all()
+        if self._painter is not threading.current_thread():
+            self._painter.join(2.0)  # its last picture sent before the server stops
         stop_quietly(self.server)
 
     def _repr_html_(self) -> str:
