@@ -52,6 +52,7 @@ if TYPE_CHECKING:
 __all__ = ["Viewer"]
 
 _PUSH_INTERVAL = 1.0 / 60.0  # s between two pictures sent to the page while running
+_END_STATE_INTERVAL = 0.05  # s between two end states (speed None) while running
 _PANELS_INTERVAL = 0.25  # s between two redraws of events, report, paths, inputs
 _BUSY_GAP = 0.25  # s after the last frame during which a command counts as running
 
@@ -326,7 +327,9 @@ class Viewer:
                         self._panels_at = time.perf_counter()
                     else:
                         self._dirty.set()  # the panels a little later
-                        time.sleep(_PUSH_INTERVAL)
+                        # end states at most 20 a second while a program runs (the later
+                        # ones replace the earlier: the page keeps up, the program too)
+                        time.sleep(_END_STATE_INTERVAL if self.busy else _PUSH_INTERVAL)
                 except Exception:  # the program changed the timeline meanwhile: next time
                     self._dirty.set()
             state = "busy" if self.busy else "idle"
