@@ -205,13 +205,15 @@ def test_a_run_shows_its_frames_as_they_are_made(page):
         sim.move_joints_absolute("puma", q)  # 0.6 rad at 0.3 rad/s: 2 s
         wall = time.perf_counter() - t0
         last = sim.frames - 1
-        assert _until(lambda: page.evaluate("() => window.__seen")[-1][1] == last, page=page)
+        shown = lambda: page.evaluate("() => window.__seen")[-1][1]  # noqa: E731
+        assert _until(lambda: shown() == last, timeout=30, page=page), (shown(), last)
         seen = page.evaluate("() => window.__seen")
     assert sim.sim_time == pytest.approx(2.0, abs=1e-9)
-    assert 1.9 < wall < 3.5, wall  # paced: never faster than real time (slower under load)
+    assert 1.9 < wall < 5.0, wall  # paced: never faster than real time (slower under load)
     frames = [f for _, f, _ in seen]
     assert frames == sorted(frames)
-    assert len(frames) >= 5, frames  # the start, the end and frames between
+    assert len(frames) >= 4, frames  # the start, the end and frames between (a loaded
+    # machine paints a software-rendered page a few times a second)
     times = sim.timeline.sim_times()
     for t, f, _ in seen:
         assert t == pytest.approx(times[f], abs=1e-3)
