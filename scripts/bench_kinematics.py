@@ -12,25 +12,40 @@ For the Puma 560, the Puma 260, the UR5e and the KUKA KR 6 R700 (targets in brac
 - ``Robot.ik`` (mink, and ``method="newton-gauss"``) over random full-range reachable
   targets ``fk(q)`` for the Pumas: success rate (>= 99.5 %), median and p90 ms (mink
   median <= 2 ms);
-- ``mujoco.mj_kinematics`` on each robot's kinematic model (calls/s): the floor.
+- ``mujoco.mj_kinematics`` on each robot's kinematic model (calls/s): the floor;
+- redundant, hard-limit arms (the Panda, compiled from rtb-data's xacro with xacrodoc,
+  and rtb-data's LBR iiwa 14 URDF; test-only packages): ``Robot.ik`` over random
+  reachable targets ``fk(q)``, q uniform within the limits (success >= 99 %, every
+  success re-verified here by ``Robot.fk`` within the tolerances: no false success),
+  against today's solver (``ik_mink`` as it was at commit ``BASELINE``, read from git)
+  on the same targets, alternately, in the same run: success rates and the ratio of
+  the median times.
 
 Usage: python scripts/bench_kinematics.py [--n-ik N] [--n-batch N] [--n-single N] [--repeat R]
+       [--n-redundant N]
 """
 
 from __future__ import annotations
 
 import argparse
+import subprocess
+import sys
+import tempfile
 import time
+import types
+import warnings
+from pathlib import Path
 
 import mujoco
 import numpy as np
 from benchutil import median_time, paired_median_times
 
-from workcell.robots import Robot, get
+from workcell.robots import Robot, from_urdf, get
 from workcell.robots.ik_closed import ik_all, ik_batch
 from workcell.robots.mjcf import kinematic_model
 
 ROBOTS = ("puma560", "puma260", "ur5e", "kuka_kr6_r700")
+BASELINE = "8012137"  # main before the redundant-arm work (issue 20 item 6): "today's solver"
 
 
 def ik_stats(robot: Robot, targets: np.ndarray, method: str) -> dict[str, float]:
@@ -123,12 +138,108 @@ def closed_form(robot: Robot, Ts: np.ndarray, Tb: np.ndarray, fk_us: float, repe
     )
 
 
+def redundant_arms(folder: Path) -> dict[str, Robot]:
+    """The Panda (rtb-data xacro, compiled with xacrodoc) and the LBR iiwa 14 (rtb-data
+    URDF), kinematics only; {} when the test-only packages are missing."""
+    try:
+        import rtbdata
+        from xacrodoc import XacroDoc, packages
+    except ImportError:
+        return {}
+    xacro = Path(rtbdata.__path__[0]) / "xacro"
+    frankie = xacro / "qut_frankie_description"
+    packages.update_package_cache({"qut_frankie_description": str(frankie)})
+    doc = XacroDoc.from_file(frankie / "robots/panda_arm.urdf.xacro", resolve_packages=False)
+    panda = folder / "panda_arm.urdf"
+    panda.write_text(doc.to_urdf_string())
+    iiwa = xacro / "kuka_description/kuka_lbr_iiwa/urdf/lbr_iiwa_14_r820.urdf"
+    with warnings.catch_warnings():  # the files' missing visual meshes
+        warnings.simplefilter("ignore")
+        return {
+            "panda": from_urdf(panda, geometry=False),
+            "lbr_iiwa_14_r820": from_urdf(iiwa, geometry=False),
+        }
+
+
+def todays_solver():
+    """``_solve_mink`` of ``workcell/robots/ik_mink.py`` at commit ``BASELINE`` (from git),
+    or None when git or that commit is not at hand."""
+    root = Path(__file__).resolve().parent.parent
+    try:
+        src = subprocess.run(
+            ["git", "show", f"{BASELINE}:workcell/robots/ik_mink.py"],
+            cwd=root, capture_output=True, text=True, check=True,
+        ).stdout  # fmt: skip
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    mod = types.ModuleType("ik_mink_baseline")
+    sys.modules[mod.__name__] = mod  # dataclasses look their module up
+    exec(compile(src, f"ik_mink.py@{BASELINE}", "exec"), mod.__dict__)
+    return mod._solve_mink
+
+
+def redundant_stats(robot: Robot, targets: np.ndarray, baseline) -> None:
+    """Ours and today's solver, alternately on the same targets: success, false successes
+    (re-verified by ``Robot.fk``), median and p90 ms, and the ratio of the medians."""
+    from workcell.robots.ik_common import DEFAULT_MAX_ITERATIONS, DEFAULT_RESTARTS, _start
+
+    tol = 1e-6  # m and rad: Robot.ik's defaults
+    q0 = _start(robot, None)
+    iters, restarts = DEFAULT_MAX_ITERATIONS["mink"], DEFAULT_RESTARTS["mink"]
+    solvers = {"ours": lambda T: robot.ik(T)}
+    if baseline is not None:
+        solvers["today"] = lambda T: baseline(
+            robot, T, q0, None, tol, tol, iters, restarts, np.random.default_rng(0)
+        )
+    stats = {k: {"ok": 0, "false": 0, "t": []} for k in solvers}
+    for solve in solvers.values():
+        solve(targets[0])  # warm-up: builds the caches
+    for T in targets:
+        for name, solve in solvers.items():
+            t0 = time.perf_counter()
+            sol = solve(T)
+            stats[name]["t"].append(time.perf_counter() - t0)
+            if sol.success:
+                D = robot.fk(sol.q) - T
+                exact = np.linalg.norm(D[:3, 3]) <= tol and robot.within_limits(sol.q)
+                exact &= _angle(robot.fk(sol.q)[:3, :3], T[:3, :3]) <= tol
+                stats[name]["ok" if exact else "false"] += 1
+    n = len(targets)
+    med = {}
+    for name, st in stats.items():
+        t = np.array(st["t"]) * 1e3
+        med[name] = float(np.median(t))
+        line = (
+            f"Robot.ik {'(today)' if name == 'today' else '       '}  {100 * st['ok'] / n:>11.1f} %  "
+            f"success on {n} reachable targets; false successes {st['false']}; "
+            f"median {med[name]:.2f} ms, p90 {np.percentile(t, 90):.2f} ms, max {t.max():.1f} ms"
+        )
+        if name == "ours":
+            good = st["ok"] >= 0.99 * n and st["false"] == 0
+            line += f" (target >= 99 %, no false success: {'ok' if good else 'MISSED'})"
+        print(line)
+    if "today" in med:
+        print(
+            f"median time ours / today's      {med['ours'] / med['today']:>12.2f}x   "
+            f"(today's solver: ik_mink at {BASELINE})"
+        )
+    else:
+        print("today's solver                 (not measured: git or the baseline commit missing)")
+
+
+def _angle(Ra: np.ndarray, Rb: np.ndarray) -> float:
+    return float(np.arccos(np.clip((np.trace(Ra.T @ Rb) - 1.0) / 2.0, -1.0, 1.0)))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n-ik", type=int, default=200, help="random IK targets (default 200)")
     ap.add_argument("--n-batch", type=int, default=100_000, help="poses per batch (default 1e5)")
     ap.add_argument("--n-single", type=int, default=2000, help="single calls timed (default 2000)")
     ap.add_argument("--repeat", type=int, default=5, help="timed repeats (median, default 5)")
+    ap.add_argument(
+        "--n-redundant", type=int, default=500, help="targets per redundant arm (default 500)"
+    )
     args = ap.parse_args()
 
     for name in ROBOTS:
@@ -186,6 +297,17 @@ def main() -> None:
                 good = s["success"] >= 0.995 and s["median_ms"] <= 2.0
                 line += f" (targets >= 99.5 %, median <= 2 ms: {'ok' if good else 'MISSED'})"
             print(line)
+
+    baseline = todays_solver()
+    with tempfile.TemporaryDirectory() as tmp:
+        arms = redundant_arms(Path(tmp))
+    if not arms:
+        print("\n(redundant arms skipped: rtb-data and xacrodoc are test-only packages)")
+    for name, robot in arms.items():
+        print(f"\n== {name} ({robot.dof} joints, {robot.ik_family} family) ==")
+        rng = np.random.default_rng(2024)
+        Q = rng.uniform(robot.lower, robot.upper, size=(args.n_redundant, robot.dof))
+        redundant_stats(robot, robot.fk_batch(Q), baseline)
 
 
 if __name__ == "__main__":

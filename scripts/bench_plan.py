@@ -1,12 +1,12 @@
 """Benchmark collision-free planning over seeded random scenes, measured in one run.
 
 For each seed: a Puma 260 on a table with one to three boxes, a start and a goal where
-the direct joint move collides (``workcell.plan.scenes.random_problem``). The planner
-(``move_joints_absolute(..., plan=True)``'s search: goal check, RRT-Connect, shortening)
-is timed; the path is run through the simulator's frames (dt 0.01 s) and every frame
-interval is re-checked at 10x the frame density with a plain MuJoCo collision loop on the
-exported MJCF (``workcell.plan.scenes.penetrations``). Reported: success rate, median
-and p90 planning time, penetrating samples (targets: >= 95 % solved, median <= 0.5 s
+the direct joint move collides (``workcell.examples.plan_problems.random_problem``). The
+planner (``move_joints_absolute(..., plan=True)``'s search: goal check, RRT-Connect,
+shortening) is timed; the path is run through the simulator's frames (dt 0.01 s) and
+every frame interval is re-checked at 10x the frame density with a plain MuJoCo collision
+loop on the exported MJCF (``workcell.examples.plan_problems.penetrations``). Reported:
+success rate, median and p90 planning time, penetrating samples (targets: >= 95 % solved, median <= 0.5 s
 here, zero penetrations), and as a baseline the same searches at OMPL's default motion
 resolution (1 % of the joint box's extent) re-checked the same way.
 
@@ -24,7 +24,7 @@ import time
 import numpy as np
 
 from workcell.errors import PlanningError
-from workcell.plan.scenes import ROBOT, penetrations, random_problem
+from workcell.examples.plan_problems import ROBOT, penetrations, random_problem
 from workcell.sim import Simulator
 
 

@@ -6,6 +6,15 @@ temporary folder" (spill files, kernel connection files, subprocesses' files) la
 there; pytest's own ``tmp_path`` folders live there too. When the session ends, anything
 else still in that folder is a leak: the session fails and lists it. The folder is then
 removed, so a run leaves nothing in /tmp. (xdist workers inherit the folder.)
+
+Property tests (hypothesis) run under the profile ``WORKCELL_HYPOTHESIS`` names:
+``ci`` (the default, so ``make test`` and CI): derandomized (each test's examples come
+from its own name: the same on every run and machine), no example database (nothing
+found on one run is replayed on the next), no deadline and no too-slow health check (a
+loaded machine must not fail a test); ``explore``: random examples on every run, as
+many as each test asks for, failures kept in ``.hypothesis/`` and replayed first
+(``WORKCELL_HYPOTHESIS=explore make test``, or add ``--hypothesis-seed=N`` to replay one
+exploration).
 """
 
 from __future__ import annotations
@@ -16,10 +25,20 @@ import tempfile
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 from workcell.decompose import CACHE_ENV
 
 _KEY = "WORKCELL_TEST_TMPDIR"
+HYPOTHESIS_PROFILE = "WORKCELL_HYPOTHESIS"
+
+_CALM = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow]}
+settings.register_profile("ci", derandomize=True, database=None, print_blob=True, **_CALM)
+settings.register_profile("explore", derandomize=False, **_CALM)
+_profile = os.environ.get(HYPOTHESIS_PROFILE, "ci")
+if _profile not in ("ci", "explore"):
+    raise pytest.UsageError(f"{HYPOTHESIS_PROFILE}={_profile!r}: valid: ci, explore")
+settings.load_profile(_profile)
 
 
 def pytest_configure(config: pytest.Config) -> None:

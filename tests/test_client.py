@@ -78,6 +78,7 @@ def test_one_program_gives_the_same_results_in_process_and_remote(server):
         assert np.allclose(q, q0, atol=1e-9)
         assert remote.wall_time > 0
         assert [e.kind for e in remote.events] == [e.kind for e in local.events]
+        assert [e.kind for e in remote.events()] == [e.kind for e in local.events()]  # calls too
 
 
 def test_a_failing_concurrent_block_is_dropped_on_both(server):

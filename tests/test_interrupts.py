@@ -53,6 +53,14 @@ def wait_for(p: subprocess.Popen, found, what: str, timeout: float = 120.0) -> N
         time.sleep(0.005)
 
 
+def loaded(pid: int, library: str) -> bool:
+    """Whether process ``pid`` has mapped a shared library whose path names ``library``."""
+    try:
+        return f"/{library}/" in Path(f"/proc/{pid}/maps").read_text()
+    except OSError:
+        return False
+
+
 def temp_files(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
 
@@ -102,7 +110,9 @@ def test_sigterm_while_writing_the_recording_leaves_no_temp_file(tmp_path):
 
 def test_ctrl_c_while_the_command_is_still_starting_prints_one_line(tmp_path):
     # `workcell robots` imports the simulator stack (MuJoCo, trimesh, ...) for about a
-    # second before it prints anything: Ctrl-C 0.3 s after start lands in those imports
+    # second before it prints anything: Ctrl-C once numpy is loaded lands in those
+    # imports (a fixed delay after start did not: on a loaded machine Python could still
+    # be starting up, before the command line's own handling)
     p = subprocess.Popen(
         [sys.executable, "-m", "workcell.cli", "robots"],
         cwd=tmp_path,
@@ -113,7 +123,7 @@ def test_ctrl_c_while_the_command_is_still_starting_prints_one_line(tmp_path):
         # SIGINT ignored, and Python then keeps ignoring it)
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
-    time.sleep(0.3)
+    wait_for(p, lambda: loaded(p.pid, "numpy"), "the heavy imports")
     p.send_signal(signal.SIGINT)
     out, err = p.communicate(timeout=60)
     assert (p.returncode, out, err) == (130, "", "workcell: interrupted\n")

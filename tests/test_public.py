@@ -19,6 +19,8 @@ MODULES = [
     "workcell.spatial",
     "workcell.spatial_checks",
     "workcell.files",
+    "workcell.confine",
+    "workcell.tempfiles",
     "workcell.solids",
     "workcell.modeller.surface",
     "workcell.modeller.model",
@@ -43,6 +45,7 @@ MODULES = [
     "workcell.robots.geometry",
     "workcell.robots.gripper",
     "workcell.robots.ik_closed",
+    "workcell.robots.ik_refine",
     "workcell.robots.ik_numeric",
     "workcell.robots.ik_common",
     "workcell.robots.ik_mink",
@@ -50,6 +53,7 @@ MODULES = [
     "workcell.robots.mjcf",
     "workcell.robots.mjcf_geoms",
     "workcell.robots.mjcf_xml",
+    "workcell.robots.mjcf_files",
     "workcell.robots.chain",
     "workcell.robots.axes",
     "workcell.robots.opw",
@@ -73,6 +77,9 @@ MODULES = [
     "workcell.plan.resting",
     "workcell.plan.scenes",
     "workcell.examples.obstacle",
+    "workcell.examples.plan_problems",
+    "workcell.cli_common",
+    "workcell.moved",
     "workcell.decompose",
     "workcell.cell",
     "workcell.cell.workcell",
@@ -94,6 +101,10 @@ MODULES = [
     "workcell.sim.paths",
     "workcell.sim.pieces",
     "workcell.sim.concurrent",
+    "workcell.sim.planned",
+    "workcell.sim.resting",
+    "workcell.sim.choosing",
+    "workcell.sim.task_commands",
     "workcell.checks",
     "workcell.sim.physics",
     "workcell.sim.physics_events",
@@ -128,6 +139,31 @@ MODULES = [
     "workcell.program.readcommands",
     "workcell.program.solidcommands",
     "workcell.program.targets",
+    "workcell.program.progcommands",
+    "workcell.program.progcli",
+    "workcell.robotprog",
+    "workcell.robotprog.instructions",
+    "workcell.robotprog.rotations",
+    "workcell.robotprog.configs",
+    "workcell.robotprog.writing",
+    "workcell.robotprog.urscript",
+    "workcell.robotprog.krl",
+    "workcell.robotprog.rapid",
+    "workcell.robotprog.fanuc",
+    "workcell.robotprog.source",
+    "workcell.robotprog.exprs",
+    "workcell.robotprog.runtime",
+    "workcell.robotprog.kuka_values",
+    "workcell.robotprog.read_krl",
+    "workcell.robotprog.read_rapid",
+    "workcell.robotprog.read_urscript",
+    "workcell.robotprog.read_fanuc",
+    "workcell.robotprog.krl_run",
+    "workcell.robotprog.krl_exprs",
+    "workcell.robotprog.rapid_run",
+    "workcell.robotprog.fanuc_run",
+    "workcell.robotprog.urscript_run",
+    "workcell.robotprog.cli",
     "workcell.client",
     "workcell.record",
     "workcell.record.render",
@@ -139,6 +175,7 @@ MODULES = [
     "workcell.record.rr_frames",
     "workcell.record.rr_images",
     "workcell.record.cli_render",
+    "workcell.record.obstacle_demo",
     "workcell.examples.thesis_joints",
     "workcell.examples.thesis_pick_place",
     "workcell.examples.thesis_handoff",
@@ -159,12 +196,49 @@ MODULES = [
 ]
 
 
+@pytest.mark.filterwarnings("ignore:.* moved to .*:DeprecationWarning")
 @pytest.mark.parametrize("name", MODULES)
 def test_every_public_name_resolves(name):
     mod = importlib.import_module(name)
     assert mod.__all__, name
     for attr in mod.__all__:
         assert hasattr(mod, attr), f"{name}.{attr}"
+
+
+def test_moved_names_resolve_at_their_old_place_with_a_warning():
+    # each module whose names moved up the layers sets a workcell.moved look-up; the
+    # old spelling gives the very object at its new place, and a DeprecationWarning
+    found = {}
+    for name in (".".join(m.parts).removesuffix(".__init__") for m in _module_paths()):
+        mod = importlib.import_module(name)
+        for value in vars(mod).values():
+            if callable(value) and hasattr(value, "moved"):
+                found[name] = value.moved
+    assert found == {
+        "workcell.plan": {"random_problem": "workcell.examples.plan_problems"},
+        "workcell.plan.motion": {"PlanningCommands": "workcell.sim.planned"},
+        "workcell.plan.resting": {"RestingCommands": "workcell.sim.resting"},
+        "workcell.plan.choices": {"ChoiceHelpers": "workcell.sim.choosing"},
+        "workcell.plan.tasks": {"TaskCommands": "workcell.sim.task_commands"},
+        "workcell.plan.scenes": dict.fromkeys(
+            ("ROBOT", "Problem", "penetrations", "random_problem"),
+            "workcell.examples.plan_problems",
+        ),
+        "workcell.examples.obstacle": dict.fromkeys(
+            ("demo", "picture"), "workcell.record.obstacle_demo"
+        ),
+    }
+    for old, names in found.items():
+        for attr, new in names.items():
+            with pytest.warns(DeprecationWarning, match=f"{old}.{attr} moved to {new}.{attr}"):
+                value = getattr(importlib.import_module(old), attr)
+            assert value is getattr(importlib.import_module(new), attr)
+    from workcell.sim import Simulator
+
+    for mixin in ("PlanningCommands", "RestingCommands", "TaskCommands", "ChoiceHelpers"):
+        assert any(c.__name__ == mixin for c in Simulator.__mro__)
+    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
+        importlib.import_module("workcell.plan.motion").nothing  # noqa: B018
 
 
 def test_errors_form_one_family():
@@ -193,8 +267,8 @@ def test_demo_solids_json(tmp_path, capsys):
 def test_every_module_imports_first_in_a_fresh_interpreter_and_the_package_is_light():
     # `import workcell` loads its names on first use (the command line starts fast and
     # its Ctrl-C handling covers the heavy imports), so each module may be the first one
-    # imported: no import cycle may depend on the order (the simulator and its planning
-    # mixins import each other's modules). One interpreter imports each module afresh.
+    # imported (the layers: test_imports_run_one_way_down_the_documented_layers). One
+    # interpreter imports each module afresh.
     names = sorted(
         ".".join(p.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__")
         for p in (ROOT / "workcell").rglob("*.py")
@@ -215,3 +289,146 @@ def test_every_module_imports_first_in_a_fresh_interpreter_and_the_package_is_li
 
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr[-2000:]
+
+
+# ---------------------------------------------------------------- layers and layout
+def _module_paths() -> list[Path]:
+    """Every module of the package, as paths relative to the repository, no suffix."""
+    return sorted(p.relative_to(ROOT).with_suffix("") for p in (ROOT / "workcell").rglob("*.py"))
+
+
+def _node(module: str) -> str | None:
+    """The layer-drawing name of ``module``: its folder ("sim/") or, for a module of the
+    package's top folder, its file ("cli.py"); None for the package itself (its facade)."""
+    parts = module.split(".")
+    if len(parts) == 1:
+        return None
+    if (ROOT / "workcell" / parts[1]).is_dir():
+        return parts[1] + "/"
+    return parts[1] + ".py"
+
+
+def _is_module(name: str) -> bool:
+    path = ROOT / Path(*name.split("."))
+    return path.with_suffix(".py").is_file() or (path / "__init__.py").is_file()
+
+
+def import_graph() -> dict[tuple[str, str], list[str]]:
+    """(from, to) -> where: every import of a workcell module by another, at any depth of
+    the code (in functions, under TYPE_CHECKING), and every string naming a workcell
+    module (look-up tables such as ``SUBCOMMAND_MODULES``), except the tables of names
+    that moved (:mod:`workcell.moved`), grouped by layer-drawing name (:func:`_node`)."""
+    import ast
+
+    edges: dict[tuple[str, str], list[str]] = {}
+    for rel in _module_paths():
+        name = ".".join(rel.parts).removesuffix(".__init__")
+        tree = ast.parse((ROOT / rel).with_suffix(".py").read_text())
+        exempt = {
+            id(c)
+            for call in ast.walk(tree)
+            if isinstance(call, ast.Call) and getattr(call.func, "id", "") == "moved"
+            for c in ast.walk(call)
+        }
+        for node in ast.walk(tree):
+            targets: list[str] = []
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                assert node.level == 0, f"{name}: relative import"
+                base = node.module or ""
+                for a in node.names:
+                    sub = f"{base}.{a.name}"
+                    if _is_module(sub):
+                        targets.append(sub)
+                    elif not (base == "workcell" and a.name == "__version__"):
+                        targets.append(base)
+            elif (
+                isinstance(node, ast.Constant)
+                and isinstance(node.value, str)
+                and node.value.startswith("workcell.")
+                and id(node) not in exempt
+                and _is_module(node.value)
+            ):
+                targets = [node.value]
+            for target in targets:
+                if not target.startswith("workcell"):
+                    continue
+                a, b = _node(name), _node(target)
+                assert b is not None or a is None, f"{name} imports the package facade: {target}"
+                if a is not None and b is not None and a != b:
+                    line = getattr(node, "lineno", "?")
+                    edges.setdefault((a, b), []).append(f"{name}:{line} -> {target}")
+    return edges
+
+
+def documented_layers() -> list[list[str]]:
+    """The layers of docs/architecture.md's drawing ("Layers"), top first: the folder
+    and module names at the start of each line."""
+    import re
+
+    text = (ROOT / "docs" / "architecture.md").read_text()
+    block = text.split("\n## Layers\n", 1)[1].split("```text\n", 1)[1].split("```", 1)[0]
+    layers = []
+    for line in block.splitlines():
+        names = []
+        for word in line.split():
+            if not re.fullmatch(r"\w+/|\w+\.py", word):
+                break
+            names.append(word)
+        assert names, f"a line of the layer drawing names no folder or module: {line!r}"
+        layers.append(names)
+    return layers
+
+
+def test_imports_run_one_way_down_the_documented_layers():
+    layers = documented_layers()
+    level = {n: i for i, names in enumerate(layers) for n in names}
+    nodes = {_node(".".join(p.parts).removesuffix(".__init__")) for p in _module_paths()}
+    nodes.discard(None)
+    missing = sorted(n for n in nodes if n not in level)
+    assert not missing, f"not in docs/architecture.md's layer drawing: {missing}"
+    stale = sorted(n for n in level if n not in nodes)
+    assert not stale, f"in the layer drawing but not in the package: {stale}"
+    edges = import_graph()
+    up = {k: v for k, v in edges.items() if level[k[1]] < level[k[0]]}
+    assert not up, "imports pointing up the layers: " + "; ".join(
+        f"{a} -> {b} ({where[0]})" for (a, b), where in sorted(up.items())
+    )
+    # and no two folders (or modules of one layer) import each other, through any path
+    reach = {n: {b for (a, b) in edges if a == n} for n in nodes}
+    changed = True
+    while changed:
+        changed = False
+        for n in nodes:
+            more = set().union(*(reach[m] for m in reach[n])) - reach[n]
+            if more:
+                reach[n] |= more
+                changed = True
+    cycles = sorted(n for n in nodes if n in reach[n])
+    assert not cycles, f"import cycles across folders through: {cycles}"
+
+
+def test_the_import_check_sees_every_kind_of_arrow(tmp_path):
+    # the graph above must see imports in functions, under TYPE_CHECKING and by name
+    edges = import_graph()
+    assert "workcell.record.render:" in " ".join(edges[("record/", "sim/")])  # TYPE_CHECKING
+    assert ("cli.py", "study/") in edges  # a string in SUBCOMMAND_MODULES
+    assert any("program.cli" in w for w in edges[("program/", "cli_common.py")])  # in a function
+    assert ("plan/", "examples/") not in edges  # a moved-names table is not an arrow
+
+
+def test_the_readme_layout_names_every_folder_and_top_module():
+    import re
+
+    text = (ROOT / "README.md").read_text()
+    block = text.split("\n## Layout\n", 1)[1].split("```text\n", 1)[1].split("```", 1)[0]
+    heads = set(re.findall(r"^ {0,2}(\w+/|\w+\.py)\s", block, re.M))
+    missing = []
+    for rel in _module_paths():
+        if len(rel.parts) > 2:
+            if f"{rel.parts[1]}/" not in heads:
+                missing.append(f"{rel.parts[1]}/")
+        elif rel.name != "__init__" and not re.search(rf"\b{rel.name}\b", block):
+            missing.append(f"{rel.name}.py")
+    assert not missing, f"not in README.md's Layout: {sorted(set(missing))}"

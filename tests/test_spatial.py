@@ -12,8 +12,7 @@ from hypothesis import strategies as st
 from workcell import spatial as sp
 from workcell.errors import GeometryError
 
-settings.register_profile("spatial", deadline=None, max_examples=60)
-settings.load_profile("spatial")
+SETTINGS = settings(max_examples=60)  # (not a profile: loading one changes every module's)
 
 angles = st.floats(-2 * math.pi, 2 * math.pi, allow_nan=False, allow_infinity=False)
 coords = st.floats(-10.0, 10.0, allow_nan=False, allow_infinity=False)
@@ -47,12 +46,14 @@ def test_all_names_resolve():
 # --- orthonormality of every rotation constructor ------------------------------------
 
 
+@SETTINGS
 @given(angles)
 def test_axis_rotations_are_orthonormal(a):
     for f in (sp.rot_x, sp.rot_y, sp.rot_z):
         assert_rotation(f(a))
 
 
+@SETTINGS
 @given(st.tuples(angles, angles, angles), seqs, vec3)
 def test_euler_is_orthonormal(a, seq, t):
     T = sp.euler(a, seq, translation=t)
@@ -60,22 +61,26 @@ def test_euler_is_orthonormal(a, seq, t):
     np.testing.assert_array_equal(T[:3, 3], t)
 
 
+@SETTINGS
 @given(vec3, angles, vec3)
 def test_axis_angle_is_orthonormal(axis, a, p):
     assume(np.linalg.norm(axis) > 1e-3)
     assert_rotation(sp.axis_angle(axis, a, p))
 
 
+@SETTINGS
 @given(st.tuples(angles, angles, angles), vec3)
 def test_srt_unit_scale_is_orthonormal(r, t):
     assert_rotation(sp.srt(1.0, r, t))
 
 
+@SETTINGS
 @given(quats, vec3)
 def test_matrix_from_quat_is_orthonormal(q, t):
     assert_rotation(sp.matrix_from_quat(q, t))
 
 
+@SETTINGS
 @given(vec3, vec3, vec3)
 def test_frame_from_points_is_orthonormal(o, a, b):
     u, v = a - o, b - o
@@ -95,6 +100,7 @@ def test_frame_from_points_is_orthonormal(o, a, b):
 # --- round trips ------------------------------------------------------------------------
 
 
+@SETTINGS
 @given(quats)
 def test_quat_matrix_round_trip(q):
     qn = q / np.linalg.norm(q)
@@ -104,6 +110,7 @@ def test_quat_matrix_round_trip(q):
     assert min(np.abs(back - qn).max(), np.abs(back + qn).max()) < 1e-9
 
 
+@SETTINGS
 @given(rigid_transforms())
 def test_matrix_quat_round_trip(T):
     pos, q = sp.pos_quat_from_pose(T)
@@ -113,6 +120,7 @@ def test_matrix_quat_round_trip(T):
     np.testing.assert_array_equal(R_only[:3, 3], 0)
 
 
+@SETTINGS
 @given(rigid_transforms())
 def test_invert_rigid(T):
     np.testing.assert_allclose(sp.invert(T) @ T, np.eye(4), atol=1e-12)
@@ -120,6 +128,7 @@ def test_invert_rigid(T):
     np.testing.assert_array_equal(sp.invert(T)[:3, :3], T[:3, :3].T)
 
 
+@SETTINGS
 @given(st.tuples(scales, scales, scales), st.tuples(angles, angles, angles), vec3)
 def test_invert_affine(s, r, t):
     T = sp.srt(s, r, t)
@@ -129,6 +138,7 @@ def test_invert_affine(s, r, t):
     np.testing.assert_array_equal(sp.invert(T)[3], [0, 0, 0, 1])
 
 
+@SETTINGS
 @given(rigid_transforms(), vec3, vec3, vec3)
 def test_from_point_pairs_recovers_transform(T, p0, p1, p2):
     P = np.array([p0, p1, p2])
@@ -142,11 +152,13 @@ def test_from_point_pairs_recovers_transform(T, p0, p1, p2):
     np.testing.assert_allclose(sp.transform_points(found, P), Q, atol=1e-8)
 
 
+@SETTINGS
 @given(st.tuples(angles, angles, angles), vec3)
 def test_euler_xyz_extrinsic_matches_srt(r, t):
     np.testing.assert_allclose(sp.euler(r, "xyz", translation=t), sp.srt(1, r, t), atol=1e-12)
 
 
+@SETTINGS
 @given(st.tuples(angles, angles, angles))
 def test_euler_intrinsic_is_moving_axes(r):
     a, b, c = r
@@ -156,6 +168,7 @@ def test_euler_intrinsic_is_moving_axes(r):
     np.testing.assert_allclose(sp.euler(deg, "XYZ", degrees=True), expected, atol=1e-12)
 
 
+@SETTINGS
 @given(quats, st.lists(quats, min_size=1, max_size=5))
 def test_quat_order_round_trip(q, qs):
     np.testing.assert_array_equal(sp.xyzw_to_wxyz(sp.wxyz_to_xyzw(q)), q)
@@ -165,6 +178,7 @@ def test_quat_order_round_trip(q, qs):
     np.testing.assert_array_equal(sp.xyzw_to_wxyz(Q)[:, 0], Q[:, 3])
 
 
+@SETTINGS
 @given(vec3, angles, vec3, vec3)
 def test_axis_angle_fixes_point_and_matches_rodrigues(axis, theta, p, v):
     assume(np.linalg.norm(axis) > 1e-3)
@@ -176,6 +190,7 @@ def test_axis_angle_fixes_point_and_matches_rodrigues(axis, theta, p, v):
     np.testing.assert_allclose(sp.transform_points(T, v), p + R @ (v - p), atol=1e-9)
 
 
+@SETTINGS
 @given(vec3, st.floats(0.0, math.pi), vec3)
 def test_rotation_angle_and_pose_error(axis, theta, t):
     assume(np.linalg.norm(axis) > 1e-3)

@@ -7,18 +7,43 @@ import re
 
 import numpy as np
 
-from workcell.errors import ModelError
+from workcell.errors import DegenerateError, ModelError
 
-__all__ = ["checked_name", "is_finite_number", "quote_angle", "quote_length", "shown"]
+__all__ = [
+    "MIN_LENGTH",
+    "check_size",
+    "checked_name",
+    "is_finite_number",
+    "quote_angle",
+    "quote_length",
+    "shown",
+]
+
+MIN_LENGTH = 1e-6  # m: the smallest side, radius or length of a solid or shape
 
 
 def is_finite_number(x: object) -> bool:
-    """True for a finite int or float (numpy scalars too), False for bools and the rest."""
-    return (
-        isinstance(x, (int, float, np.integer, np.floating))
-        and not isinstance(x, (bool, np.bool_))
-        and math.isfinite(float(x))
-    )
+    """True for a finite int or float (numpy scalars too), False for bools and the rest
+    (an integer too large for a float, 10**400, is not a finite number here)."""
+    if not isinstance(x, (int, float, np.integer, np.floating)) or isinstance(x, (bool, np.bool_)):
+        return False
+    try:
+        return math.isfinite(float(x))
+    except OverflowError:
+        return False
+
+
+def check_size(what: str, key: str, v: float) -> None:
+    """DegenerateError unless the length ``v`` (m, already a positive number) is at least
+    :data:`MIN_LENGTH` = 1 micrometre. Below it a solid has (almost) no volume: convex
+    hulls fail and the convex decomposition aborts (a cylinder of radius 1e-8 m, a box
+    side of 1e-320 m), while sizes from 1 um up, with any other side up to 1e6 m, were
+    checked to mesh, hull, decompose and compile in MuJoCo."""
+    if v < MIN_LENGTH:
+        raise DegenerateError(
+            f"{what}: {key} {float(v):.3g} m is too small: a solid's sizes must be at least "
+            f"{MIN_LENGTH:g} m (1 micrometre)"
+        )
 
 
 def quote_angle(rad: object, per: str = "") -> str:
@@ -42,7 +67,10 @@ def quote_length(m: object) -> str:
 def shown(v: object) -> str:
     """``repr(v)`` for an error message, cut to 60 characters (a value a user gave may
     be a megabyte long)."""
-    s = repr(v)
+    try:
+        s = repr(v)
+    except ValueError:  # an integer of more than 4300 digits
+        s = f"an integer of {v.bit_length() if isinstance(v, int) else '?'} bits"
     return s if len(s) <= 60 else s[:57] + "..."
 
 

@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+from workcell.cli_common import add_record_fps, check_outputs, interrupted, run_command
 from workcell.examples import CELL_HELP, CELLS
 
 __all__ = ["SUBCOMMAND_MODULES", "add_record_fps", "check_outputs", "main", "run_command"]
@@ -22,26 +23,9 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "workcell.program.cli",
     "workcell.robots.cli",
     "workcell.study.cli",
+    "workcell.program.progcli",
     "workcell.view.cli",
 )
-
-
-def check_outputs(
-    *, rrd: str | None = None, png: str | None = None, folder: str | None = None
-) -> None:
-    """Refuse, before any work, output files that cannot be written: a recording ``rrd``,
-    a picture ``png``, an output ``folder`` (each None: not asked for)."""
-    from workcell.errors import ModelError, RenderError
-    from workcell.files import check_folder, check_writable
-
-    if rrd:
-        from workcell.record import check_recording_path
-
-        check_recording_path(rrd)
-    if png:
-        check_writable(png, error=RenderError)
-    if folder:
-        check_folder(folder, error=ModelError)
 
 
 def _demo_solids(args: argparse.Namespace) -> int:
@@ -202,7 +186,7 @@ def _demo(args: argparse.Namespace) -> int:
 
         raise ProgramError(f"--dt must be > 0 s, got {args.dt}")
     if args.example == "obstacle":
-        from workcell.examples.obstacle import demo
+        from workcell.record.obstacle_demo import demo
 
         if args.physics:
             from workcell.errors import ProgramError
@@ -242,18 +226,6 @@ def _export_cell(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_record_fps(parser: argparse.ArgumentParser) -> None:
-    """The ``--record-fps`` option of the commands that record (``--save``)."""
-    parser.add_argument(
-        "--record-fps",
-        type=float,
-        default=60.0,
-        metavar="HZ",
-        help="with --save: frames per simulated second in the recording (default 60; every "
-        "event keeps its exact frame; 0: every frame of the timeline)",
-    )
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``workcell`` command (Ctrl-C at any moment: one line, status 130).
 
@@ -272,16 +244,8 @@ def main(argv: list[str] | None = None) -> int:
         if hold:
             signal.signal(signal.SIGINT, previous)
     if held:
-        return _interrupted()
+        return interrupted()
     return run_command(parser.parse_args(argv))
-
-
-def _interrupted() -> int:
-    # objects half-built when the interrupt came may fail in their finalizers on the way
-    # out; that is no news after Ctrl-C: keep the one line
-    sys.unraisablehook = lambda unraisable: None
-    print("workcell: interrupted", file=sys.stderr)
-    return 130
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -298,7 +262,7 @@ def _parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="raise (or lower) a work limit of workcell.limits for this run, e.g. "
         "--limit max_facets=2e6 (limits: max_facets, max_frames_per_command, max_frames, "
-        "max_spill_bytes, max_sim_time, max_file_bytes, max_coordinate)",
+        "max_spill_bytes, max_sim_time, max_file_bytes, max_coordinate, max_program_steps)",
     )
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run a built-in example")
@@ -363,27 +327,6 @@ def _parser() -> argparse.ArgumentParser:
     for module in SUBCOMMAND_MODULES:
         importlib.import_module(module).register(sub)
     return parser
-
-
-def run_command(args: argparse.Namespace) -> int:
-    """Run a parsed subcommand (``args.func``) under the ``--limit`` settings: a
-    WorkcellError prints one line and gives status 2; Ctrl-C prints one line and gives
-    130 (files being written are removed, never left half-written under their names);
-    anything else is a bug and raises."""
-    from workcell import limits
-    from workcell.errors import WorkcellError
-    from workcell.files import install_sigterm_cleanup
-
-    install_sigterm_cleanup()
-    try:
-        changes = dict(limits.parse_limit(t) for t in getattr(args, "limit", None) or [])
-        limits.set_limits(**changes)
-        return args.func(args)
-    except WorkcellError as exc:  # the user's; anything else is ours
-        print(f"workcell: {type(exc).__name__}: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        return _interrupted()
 
 
 if __name__ == "__main__":

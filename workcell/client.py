@@ -49,7 +49,7 @@ from workcell.program.protocol import (
     error_class,
     to_jsonable,
 )
-from workcell.sim.timeline import Event
+from workcell.sim.timeline import Event, Events
 
 __all__ = ["Client"]
 
@@ -63,6 +63,7 @@ _KEEPS_CELL = frozenset(
         "play", "joints", "tool_pose", "held", "clearance", "summary", "part_positions",
         "robots", "frames", "sim_time", "events", "hello", "part_pose", "gripper_pose",
         "speed", "trajectory", "wall_time", "concurrently_begin", "concurrently_end",
+        "export_program", "run_robot_program",
     }
 )  # fmt: skip
 
@@ -321,6 +322,27 @@ class Client:
         """Let ``seconds`` of simulated time pass."""
         self.call("wait", seconds=seconds)
 
+    def export_program(
+        self,
+        robot: str,
+        path: str,
+        *,
+        language: str | None = None,
+        signals: dict[str, int] | None = None,
+    ) -> list[str]:
+        """Write ``robot``'s program as it ran to ``path`` (on the server, inside its root)
+        in ``language`` (default from the suffix); the files written."""
+        return self.call(
+            "export_program", robot=robot, path=path, language=language, signals=signals or {}
+        )
+
+    def run_robot_program(
+        self, robot: str, path: str, *, language: str | None = None
+    ) -> dict[str, Any]:
+        """Run the robot program file ``path`` (on the server) on ``robot``: the simulated
+        clock (``sim_time_s``) and the ``outputs`` it set."""
+        return self.call("run_robot_program", robot=robot, path=path, language=language)
+
     def play(self, realtime: bool | None = None) -> int:
         """Replay the stored frames; the number shown."""
         return self.call("play", realtime=realtime)
@@ -402,9 +424,12 @@ class Client:
         return float(self.call("wall_time"))
 
     @property
-    def events(self) -> tuple[Event, ...]:
-        """The timeline's events."""
-        return tuple(Event(e["t"], e["robot"], e["kind"], e["detail"]) for e in self.call("events"))
+    def events(self) -> Events:
+        """The timeline's events: ``sim.events()`` or ``sim.events`` (the same tuple), as
+        on :class:`~workcell.sim.Simulator`."""
+        return Events(
+            Event(e["t"], e["robot"], e["kind"], e["detail"]) for e in self.call("events")
+        )
 
     @property
     def cell(self) -> Workcell:

@@ -8,12 +8,14 @@ from __future__ import annotations
 
 __all__ = [
     "CollisionError",
+    "DegenerateError",
     "GeometryError",
     "GraspError",
     "JointLimitError",
     "KinematicsError",
     "LimitError",
     "ModelError",
+    "NativeCrashError",
     "PlanningError",
     "ProgramError",
     "ProtocolError",
@@ -36,6 +38,17 @@ class ModelError(WorkcellError):
 
 class GeometryError(WorkcellError):
     """Geometry is invalid (open or self-intersecting contour, singular transform, bad solid)."""
+
+
+class DegenerateError(GeometryError, ModelError):
+    """A solid or shape too small or too thin to have a volume (a side under
+    :data:`workcell.checks.MIN_LENGTH`): both a GeometryError (a bad solid) and a ModelError
+    (a bad robot file's shape)."""
+
+
+class NativeCrashError(ModelError):
+    """A child process doing native geometry work (:mod:`workcell.native`) died: an abort,
+    a signal, or out of memory; the message names the work."""
 
 
 class KinematicsError(WorkcellError):

@@ -8,35 +8,36 @@ FIFO, a device) is refused; an existing file keeps its mode (and, when allowed, 
 owner). A temp file is removed on any error, on Ctrl-C and on SIGTERM. Every
 file-system failure (missing folder, not a folder, permission, read-only, name too long,
 disk full) becomes the caller's :class:`~workcell.errors.WorkcellError` subclass naming
-the path; :func:`check_writable` runs the same checks before expensive work starts.
+the path; :func:`check_writable` runs the same checks before expensive work starts. A
+temp file's name says which machine and process writes it, and the next write of the
+same file removes those whose process died (SIGKILL leaves them: nothing runs then).
 
-Reading (:func:`read_bytes`, :func:`read_text`, :func:`load_json`): bounded by the
-``max_file_bytes`` limit (:mod:`workcell.limits`; ``/dev/zero`` stops there), and a file
-that does not parse gives the caller's error class without echoing the file's content.
+Reading (:func:`read_bytes`, :func:`read_text`, :func:`load_json`): regular files only
+(a folder, a FIFO, a socket or a device is refused before anything opens it, and the
+open cannot block: a file swapped in between is caught after the open), bounded by the
+``max_file_bytes`` limit (:mod:`workcell.limits`), confined to the root folder in force
+(:mod:`workcell.confine`), and a file that does not parse gives the caller's error class
+without echoing the file's content.
 
-Confinement (:func:`resolve_inside`, :func:`leaves_root`): a file name taken relative to a
-root folder, refused when it could lead outside it (absolute, ``~``, ``..``, hidden names,
-symbolic links, and regular files with more than one hard link: a hard link planted in the
-root may be the same file as one anywhere else on the file system).
+Confinement (:func:`resolve_inside`, :func:`leaves_root`) lives in :mod:`workcell.confine`
+(re-exported here).
 """
 
 from __future__ import annotations
 
-import atexit
 import contextlib
-import errno
 import json
 import os
-import secrets
-import signal
 import stat
-import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from workcell import limits
+from workcell import confine, limits
+from workcell.confine import leaves_root, resolve_inside
 from workcell.errors import WorkcellError
+from workcell.tempfiles import install_sigterm_cleanup, reason, temp_file
+from workcell.tempfiles import kind as file_kind
 
 __all__ = [
     "atomic_path",
@@ -56,86 +57,32 @@ __all__ = [
 
 Error = type[WorkcellError]
 
-_REASONS = {
-    errno.ENOENT: "no such file or folder",
-    errno.ENOTDIR: "a part of the path is not a folder",
-    errno.EACCES: "permission denied",
-    errno.EPERM: "operation not permitted",
-    errno.EROFS: "read-only file system",
-    errno.ENAMETOOLONG: "file name too long",
-    errno.ENOSPC: "no space left on device",
-    errno.EDQUOT: "disk quota exceeded",
-    errno.EISDIR: "it is a folder",
-    errno.ELOOP: "too many levels of symbolic links",
-    errno.EEXIST: "it exists and is not a folder",
-}
 
-
-def _reason(exc: OSError) -> str:
-    return _REASONS.get(exc.errno or 0) or exc.strerror or str(exc)
-
-
-# ------------------------------------------------------------------ SIGTERM cleanup
-_live: set[str] = set()
-_live_lock = threading.Lock()
-_previous: Any = None
-_installed = False
-
-
-def _remove_live() -> None:
-    """Remove the temp files of writes still in progress (a signal, or the interpreter
-    leaving while daemon threads write)."""
-    with _live_lock:
-        tmps = list(_live)
-    for tmp in tmps:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-
-
-atexit.register(_remove_live)
-
-
-def _on_sigterm(signum: int, frame: Any) -> None:
-    _remove_live()
-    if callable(_previous):
-        _previous(signum, frame)
-        return
-    signal.signal(signum, signal.SIG_DFL)  # die of the signal, as without us
-    os.kill(os.getpid(), signum)
-
-
-def install_sigterm_cleanup() -> bool:
-    """Make SIGTERM remove the temp files of writes in progress (then act as before).
-
-    Needs the main thread: :func:`atomic_path` calls it when it runs there; servers call
-    it at start for their worker threads. Returns whether the handler is installed.
-    """
-    global _previous, _installed
-    if _installed:
-        return True
-    if threading.current_thread() is not threading.main_thread():
-        return False
-    prev = signal.getsignal(signal.SIGTERM)
-    if prev is signal.SIG_IGN:
-        return False
-    _previous = prev if callable(prev) else None
-    signal.signal(signal.SIGTERM, _on_sigterm)
-    _installed = True
-    return True
+def _name(path: str | os.PathLike, doing: str, error: Error) -> str:
+    """``path`` as a string the file system can take; ``error`` for a NUL character or a
+    lone surrogate (text no file name can hold; quoted escaped in the message)."""
+    name = os.fspath(path)
+    try:
+        os.fsencode(name)
+    except UnicodeEncodeError:
+        raise error(f"cannot {doing} {name!r}: the name holds a lone surrogate") from None
+    if "\x00" in str(name):
+        raise error(f"cannot {doing} {name!r}: the name holds a NUL character")
+    return name
 
 
 # ------------------------------------------------------------------ writing
 def _target(path: str | os.PathLike, error: Error) -> tuple[Path, os.stat_result | None]:
     """The file a write to ``path`` replaces (symbolic links followed) and its stat."""
-    p = Path(os.path.realpath(os.fspath(path)))
+    p = Path(os.path.realpath(_name(path, "write", error)))
     try:
         st = os.stat(p)
     except FileNotFoundError:
         st = None
     except OSError as exc:
-        raise error(f"cannot write '{path}': {_reason(exc)}") from exc
+        raise error(f"cannot write '{path}': {reason(exc)}") from exc
     if st is not None and not stat.S_ISREG(st.st_mode):
-        kind = "a folder" if stat.S_ISDIR(st.st_mode) else _kind(st.st_mode)
+        kind = "a folder" if stat.S_ISDIR(st.st_mode) else file_kind(st.st_mode)
         raise error(
             f"cannot write '{path}': it is {kind}, not a regular file; refusing to replace it"
         )
@@ -146,7 +93,7 @@ def _target(path: str | os.PathLike, error: Error) -> tuple[Path, os.stat_result
         why = (
             f"folder '{folder}' does not exist"
             if isinstance(exc, FileNotFoundError)
-            else _reason(exc)
+            else reason(exc)
         )
         raise error(f"cannot write '{path}': {why}") from exc
     if not stat.S_ISDIR(fst.st_mode):
@@ -160,42 +107,6 @@ def _target(path: str | os.PathLike, error: Error) -> tuple[Path, os.stat_result
     return p, st
 
 
-def _kind(mode: int) -> str:
-    for test, kind in (
-        (stat.S_ISFIFO, "a FIFO"),
-        (stat.S_ISCHR, "a character device"),
-        (stat.S_ISBLK, "a block device"),
-        (stat.S_ISSOCK, "a socket"),
-    ):
-        if test(mode):
-            return kind
-    return "not a regular file"
-
-
-@contextlib.contextmanager
-def _temp_file(p: Path, suffix: str, path: object, error: Error, doing: str) -> Iterator[str]:
-    """A new empty file (mode 0600) beside ``p``, removed when the block ends (unless it
-    was renamed away). Its name is chosen and tracked before it exists, so no Ctrl-C or
-    SIGTERM between creating and removing it can leave it behind."""
-    tmp = os.path.join(p.parent, f".{p.name[:80]}.{secrets.token_hex(4)}{suffix}")
-    with _live_lock:
-        _live.add(tmp)
-    not_ours = False
-    try:
-        try:
-            os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY | os.O_CLOEXEC, 0o600))
-        except OSError as exc:
-            not_ours = isinstance(exc, FileExistsError)
-            raise error(f"cannot {doing} '{path}': {_reason(exc)}") from exc
-        yield tmp
-    finally:
-        if not not_ours:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-        with _live_lock:
-            _live.discard(tmp)
-
-
 def check_writable(path: str | os.PathLike, *, error: Error = WorkcellError) -> Path:
     """Check that ``path`` can be written (the checks of :func:`atomic_path`, plus a real
     temp file created and removed in its folder); return the file that would be written.
@@ -203,7 +114,7 @@ def check_writable(path: str | os.PathLike, *, error: Error = WorkcellError) -> 
     Call it before expensive work whose result goes to ``path``.
     """
     p, _ = _target(path, error)
-    with _temp_file(p, ".probe", path, error, "write"):
+    with temp_file(p, ".probe", path, error, "write"):
         pass
     return p
 
@@ -228,7 +139,7 @@ def atomic_path(
     """
     p, st = _target(path, error)
     install_sigterm_cleanup()
-    with _temp_file(p, suffix, path, error, "write") as tmp:
+    with temp_file(p, suffix, path, error, "write") as tmp:
         try:
             yield tmp
             with open(tmp, "rb+") as f:
@@ -246,7 +157,7 @@ def atomic_path(
                 os.chmod(tmp, 0o666 & ~umask)
             os.replace(tmp, p)
         except OSError as exc:
-            raise error(f"cannot write '{path}': {_reason(exc)}") from exc
+            raise error(f"cannot write '{path}': {reason(exc)}") from exc
 
 
 def atomic_write_bytes(
@@ -277,10 +188,10 @@ def check_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Pa
         except FileNotFoundError:
             here = here.parent  # the root folder exists: this ends
         except OSError as exc:
-            raise error(f"cannot write into folder '{path}': {_reason(exc)}") from exc
+            raise error(f"cannot write into folder '{path}': {reason(exc)}") from exc
     if not stat.S_ISDIR(st.st_mode):
         raise error(f"cannot write into folder '{path}': '{here}' is not a folder")
-    with _temp_file(here / "workcell", ".probe", path, error, "write into folder"):
+    with temp_file(here / "workcell", ".probe", path, error, "write into folder"):
         pass
     return p
 
@@ -291,7 +202,7 @@ def make_folder(path: str | os.PathLike, *, error: Error = WorkcellError) -> Pat
     try:
         p.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise error(f"cannot create folder '{path}': {_reason(exc)}") from exc
+        raise error(f"cannot create folder '{path}': {reason(exc)}") from exc
     return p
 
 
@@ -308,32 +219,63 @@ def write_files(
 
 # ------------------------------------------------------------------ reading
 def read_bytes(
-    path: str | os.PathLike, *, what: str = "file", error: Error = WorkcellError
+    path: str | os.PathLike,
+    *,
+    what: str = "file",
+    error: Error = WorkcellError,
+    root: str | os.PathLike | None = None,
 ) -> bytes:
-    """The bytes of ``path``, at most ``max_file_bytes`` (:mod:`workcell.limits`): a larger
-    file raises LimitError (a device such as /dev/zero stops at the limit); ``error`` for
-    a file that cannot be read, a folder, a FIFO or a socket."""
+    """The bytes of regular file ``path``, at most ``max_file_bytes`` (:mod:`workcell.limits`).
+
+    ``root`` (default: the root of :func:`workcell.confine.confined` in force, if any):
+    the file must lie inside it (checked on the name before anything is opened, with a
+    message that never tells whether a file outside exists, and again on the file
+    opened). A folder, FIFO, socket or device is refused (``error``) before it is opened;
+    the open never blocks (``O_NONBLOCK``) and the file opened is checked again (a FIFO
+    swapped in between is refused, not waited on). A larger file raises LimitError before
+    it is read; ``error`` for a file that cannot be read.
+    """
     bound = limits.current().max_file_bytes
+    root = confine.current_root() if root is None else root
+    name = _name(path, f"read {what}", error)
+    if root is not None:
+        why = leaves_root(name, root)
+        if why is not None:
+            raise error(f"cannot read {what} '{path}': {why}")
     try:
-        fd = os.open(os.fspath(path), os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+        st = os.stat(name)
     except OSError as exc:
-        raise error(f"cannot read {what} '{path}': {_reason(exc)}") from exc
+        raise error(f"cannot read {what} '{path}': {reason(exc)}") from None
+    _regular(st, path, what, error)
+    limits.check("max_file_bytes", st.st_size, f"{what} '{path}'")
+    try:
+        fd = os.open(name, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
+    except OSError as exc:
+        raise error(f"cannot read {what} '{path}': {reason(exc)}") from exc
     try:
         st = os.fstat(fd)
-        if stat.S_ISDIR(st.st_mode):
-            raise error(f"cannot read {what} '{path}': it is a folder")
-        if not (stat.S_ISREG(st.st_mode) or stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode)):
-            raise error(f"cannot read {what} '{path}': it is {_kind(st.st_mode)}")
-        if stat.S_ISREG(st.st_mode):
-            limits.check("max_file_bytes", st.st_size, f"{what} '{path}'")
+        _regular(st, path, what, error)
+        if root is not None:
+            why = confine.opened_leaves_root(fd, name, root)
+            if why is not None:
+                raise error(f"cannot read {what} '{path}': {why}")
+        limits.check("max_file_bytes", st.st_size, f"{what} '{path}'")
         with os.fdopen(os.dup(fd), "rb") as f:
             data = f.read(bound + 1)
     except OSError as exc:
-        raise error(f"cannot read {what} '{path}': {_reason(exc)}") from exc
+        raise error(f"cannot read {what} '{path}': {reason(exc)}") from exc
     finally:
         os.close(fd)
     limits.check("max_file_bytes", len(data), f"{what} '{path}' (read stopped there)")
     return data
+
+
+def _regular(st: os.stat_result, path: object, what: str, error: Error) -> None:
+    """``error`` unless ``st`` is a regular file's."""
+    if stat.S_ISREG(st.st_mode):
+        return
+    kind = "a folder" if stat.S_ISDIR(st.st_mode) else file_kind(st.st_mode)
+    raise error(f"cannot read {what} '{path}': it is {kind}, not a regular file")
 
 
 def read_text(path: str | os.PathLike, *, what: str = "file", error: Error = WorkcellError) -> str:
@@ -363,57 +305,3 @@ def load_json(path: str | os.PathLike, *, what: str = "file", error: Error = Wor
         msg = str(exc)
         why = "an integer has more than 4300 digits" if "digits" in msg else msg.split(";")[0]
         raise error(f"{where} is not valid JSON: {why}") from None
-
-
-# ------------------------------------------------------------------ confinement
-def resolve_inside(root: str | os.PathLike, name: object, *, error: Error = WorkcellError) -> Path:
-    """The file ``name`` (relative) inside folder ``root``, symbolic links resolved.
-
-    Refused (``error``): a name that is not a non-empty string, absolute paths, ``~``,
-    ``..``, hidden names (a part starting with '.'), NUL characters, and anything that
-    resolves outside ``root`` through a symbolic link. The message is the same whether
-    or not the file exists.
-    """
-    if not isinstance(name, str) or not name.strip():
-        raise error(f"a file name must be a non-empty string, got {name!r}")
-    rule = (
-        "file names are relative to the server's root folder: no absolute paths, '~', "
-        "'..' or hidden ('.') names"
-    )
-    parts = Path(name).parts
-    if (
-        "\x00" in name
-        or os.path.isabs(name)
-        or name.startswith("~")
-        or any(part == ".." or part.startswith(".") for part in parts)
-    ):
-        raise error(f"file name {name!r} refused: {rule}")
-    full = os.path.realpath(os.path.join(os.path.realpath(os.fspath(root)), name))
-    why = leaves_root(full, root)
-    if why is not None:
-        raise error(f"file name {name!r} refused: {why}")
-    return Path(full)
-
-
-def leaves_root(path: str | os.PathLike, root: str | os.PathLike) -> str | None:
-    """Why ``path`` may lead outside the folder ``root`` (None: it does not).
-
-    ``path`` resolved through symbolic links must lie inside ``root`` (resolved too); an
-    existing regular file must have one hard link only (another name of the same file
-    may lie anywhere on the file system, and nothing tells where). The reasons never
-    say whether a file outside the root exists.
-    """
-    real_root = os.path.realpath(os.fspath(root))
-    full = os.path.realpath(os.fspath(path))
-    if os.path.commonpath([full, real_root]) != real_root:
-        return "it leads outside the root folder"
-    try:
-        st = os.stat(full)
-    except OSError:
-        return None  # not there (yet): reading it fails later, writing it creates it
-    if stat.S_ISREG(st.st_mode) and st.st_nlink > 1:
-        return (
-            f"it is a file with {st.st_nlink} hard links, which may lead outside the "
-            "root folder; copy the file into the root instead"
-        )
-    return None

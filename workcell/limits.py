@@ -18,6 +18,21 @@ limit                       default        what it bounds
 ``max_file_bytes``          256 MiB        a model, cell or script file read
 ``max_coordinate``          1e6 m          any coordinate, length or translation given, and
                                            any entry of a transform's 3x3 part
+``max_path_samples``        100,000        poses one Cartesian command solves IK for (a line
+                                           or arc at a tiny step; ~40 us and ~1.3 KB each)
+``max_candidates``          1,000,000      candidates of one study (a grid or a sample)
+``max_workers``             64             worker processes one study starts on this machine
+``max_images``              100,000        pictures one command renders (video frames,
+                                           recorded images, contact-sheet tiles; ~10 ms each)
+``max_pixels``              50,000,000     pixels of one picture (a contact sheet whole;
+                                           3 bytes each: 150 MB)
+``max_line_chars``          65,536         characters of one command-language line (the
+                                           parser takes ~5 us each)
+``max_native_seconds``      120 s          wall time of one native geometry job in a child
+                                           process (a convex decomposition)
+``max_native_bytes``        3 GiB          address space of such a child process
+``max_program_steps``       1,000,000      statements one robot program (KRL, RAPID, ...)
+                                           runs (its loops and jumps included)
 ==========================  =============  ==================================================
 
 Raise (or lower) them for a block of code, in this thread only::
@@ -50,6 +65,7 @@ __all__ = [
     "Limits",
     "check",
     "current",
+    "exceeded",
     "parse_limit",
     "set_limits",
     "using",
@@ -74,6 +90,15 @@ class Limits:
     max_sim_time: float = _limit(1e7, "s", "the simulated clock")
     max_file_bytes: int = _limit(256 << 20, "bytes", "a file read (model, cell, script)")
     max_coordinate: float = _limit(1e6, "m", "a coordinate, length or transform entry")
+    max_path_samples: int = _limit(100_000, "samples", "IK samples of one Cartesian command")
+    max_candidates: int = _limit(1_000_000, "candidates", "candidates of one study")
+    max_workers: int = _limit(64, "workers", "worker processes one study starts here")
+    max_images: int = _limit(100_000, "pictures", "pictures rendered by one command")
+    max_pixels: int = _limit(50_000_000, "pixels", "pixels of one picture")
+    max_line_chars: int = _limit(65_536, "characters", "one command-language line")
+    max_native_seconds: float = _limit(120.0, "s", "one native geometry job (child process)")
+    max_native_bytes: int = _limit(3 << 30, "bytes", "a native geometry child's memory")
+    max_program_steps: int = _limit(1_000_000, "steps", "statements a robot program runs")
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -147,7 +172,9 @@ def parse_limit(text: str) -> tuple[str, float]:
 
 
 def _fmt(v: float) -> str:
-    if isinstance(v, int) or (math.isfinite(v) and v == int(v) and abs(v) < 1e15):
+    if (isinstance(v, int) and abs(v) < 10**15) or (
+        math.isfinite(v) and v == int(v) and abs(v) < 1e15
+    ):
         return f"{int(v):,}"
     return f"{v:.4g}"
 
@@ -158,12 +185,17 @@ def check(name: str, amount: float, what: str) -> None:
     ``what`` names the work, e.g. ``"sphere 's'"``. Call it before the work starts;
     ``amount`` may be a float estimate (inf and NaN are over every limit).
     """
-    lim = current()
-    bound = getattr(lim, name)
-    if amount <= bound:  # False for NaN
+    if amount <= getattr(current(), name):  # False for NaN
         return
+    raise exceeded(name, amount, what)
+
+
+def exceeded(name: str, amount: float, what: str) -> LimitError:
+    """The LimitError saying that ``what`` needs ``amount`` of limit ``name``, over it
+    (for work stopped when it reaches a limit, e.g. a child process out of time)."""
+    bound = getattr(current(), name)
     unit = Limits.__dataclass_fields__[name].metadata["unit"]
-    raise LimitError(
+    return LimitError(
         f"{what}: {_fmt(amount)} {unit} is over the limit {name} = {_fmt(bound)} {unit}; "
         f"raise it with workcell.limits.using({name}=...) in Python or "
         f"'workcell --limit {name}=N ...' on the command line"

@@ -31,13 +31,14 @@ Units: metres, kg/m^3.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import mujoco
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
-from workcell.decompose import DEFAULT_CONCAVITY, decompose
+from workcell.decompose import DEFAULT_CONCAVITY, decompose, decompose_many
 from workcell.modeller.model import Model
 
 __all__ = [
@@ -52,6 +53,7 @@ __all__ = [
     "collision_meshes",
     "collision_pieces",
     "convex_pieces",
+    "decompose_ahead",
     "is_convex",
     "mass_inertia",
     "stl_bytes",
@@ -101,11 +103,19 @@ class CollisionPieces:
         return self.method == "convex"
 
 
+Decomposer = Callable[..., list[trimesh.Trimesh]]
+
+
 def collision_pieces(
-    model: Model, ref: str | tuple[str, str], concavity: float = DEFAULT_CONCAVITY
+    model: Model,
+    ref: str | tuple[str, str],
+    concavity: float = DEFAULT_CONCAVITY,
+    *,
+    decomposer: Decomposer = decompose,
 ) -> CollisionPieces:
     """Convex collision pieces of a block or object (module doc, rules 1-4). ``ref``: a
-    block name or ``(level, name)``; ``concavity``: CoACD's error bound."""
+    block name or ``(level, name)``; ``concavity``: CoACD's error bound; ``decomposer``:
+    rule 3's ``f(mesh, concavity, label=...)`` (:func:`workcell.decompose.decompose`)."""
     level, name = ref if isinstance(ref, tuple) else ("block", ref)
     mesh = model.world_mesh((level, name))
     if is_convex(mesh):
@@ -116,14 +126,35 @@ def collision_pieces(
         for rel in model.relations((level, name)):
             if rel.target_level not in _COMPOSED:
                 return CollisionPieces([mesh.convex_hull], "hull")
-            sub = collision_pieces(model, (rel.target_level, rel.target), concavity)
+            sub = collision_pieces(
+                model, (rel.target_level, rel.target), concavity, decomposer=decomposer
+            )
             pieces.extend(p.copy().apply_transform(rel.transform) for p in sub.pieces)
             methods.add(sub.method)
         if pieces:
             worst = next((m for m in ("hull", "coacd") if m in methods), "exact")
             return CollisionPieces(pieces, worst)
-    pieces = decompose(mesh, concavity, label=f"{level} '{name}'")
+    pieces = decomposer(mesh, concavity, label=f"{level} '{name}'")
     return CollisionPieces(pieces, "coacd" if len(pieces) > 1 else "hull")
+
+
+def decompose_ahead(
+    model: Model, refs: Sequence[str | tuple[str, str]], concavity: float = DEFAULT_CONCAVITY
+) -> None:
+    """Decompose at once, on all cores, every mesh that :func:`collision_pieces` of
+    ``refs`` will ask CoACD for (:func:`workcell.decompose.decompose_many`), so the calls
+    that follow come from the cache: one batch of child processes instead of one per part."""
+    wanted: list[tuple[trimesh.Trimesh, str]] = []
+
+    def note(mesh: trimesh.Trimesh, concavity: float, *, label: str) -> list[trimesh.Trimesh]:
+        wanted.append((mesh, label))
+        return [mesh]
+
+    for ref in refs:
+        if len(model.world_mesh(ref).faces):  # an empty part: the caller's error to give
+            collision_pieces(model, ref, concavity, decomposer=note)
+    if wanted:
+        decompose_many([m for m, _ in wanted], concavity, labels=[lb for _, lb in wanted])
 
 
 def convex_pieces(

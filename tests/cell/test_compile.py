@@ -9,7 +9,7 @@ import sys
 import mujoco
 import numpy as np
 import pytest
-from conftest import two_puma_cell
+from cell_helpers import two_puma_cell
 
 from workcell.cell import compile_cell, export_cell
 from workcell.cli import main

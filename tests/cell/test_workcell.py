@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import two_puma_cell
+from cell_helpers import two_puma_cell
 
 from workcell import GeometryError, ModelError, WorkcellError
 from workcell.cell import Workcell

@@ -106,7 +106,7 @@ def test_a_version_that_is_not_the_integer_1_is_refused(version):
     ],
 )
 def test_bad_names_are_refused_quickly_everywhere(tmp_path, name):
-    t0 = time.perf_counter()
+    t0 = time.process_time()  # CPU time: the work done, whatever the machine's load
     m = Model()
     with pytest.raises(ModelError, match="invalid name") as info:
         m.create("block", name)
@@ -122,7 +122,7 @@ def test_bad_names_are_refused_quickly_everywhere(tmp_path, name):
     with pytest.raises(ModelError) as info:
         Workcell.from_dict(cell)
     assert len(str(info.value)) < 500
-    assert time.perf_counter() - t0 < 2.0
+    assert time.process_time() - t0 < 2.0
     assert m.list("block") == []
 
 

@@ -66,3 +66,52 @@ def test_a_part_wider_than_the_opening_everywhere_has_no_grasp():
     )
     assert len(poses) == 8
     assert all(abs(g.tool[1, 1]) == pytest.approx(1.0) for g in poses)  # fingers along y
+
+
+def test_a_grippers_depths_come_from_its_finger_length_and_tcp():
+    from workcell.plan.grasps import grip_depths
+    from workcell.robots.gripper import parallel_gripper
+
+    # the defaults: fingers 50 mm beyond the palm, the TCP a quarter of them from the tips
+    assert grip_depths(parallel_gripper()) == pytest.approx((0.0375, 0.0125), abs=1e-12)
+    long = parallel_gripper(finger_length=0.08, tcp_depth=0.01, palm_height=0.02)
+    assert grip_depths(long) == pytest.approx((0.07, 0.01), abs=1e-12)
+
+
+PALM, TIPS, MARGIN = 0.0375, 0.0125, 0.001  # the default gripper's depths (above)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    height=st.floats(0.004, 0.3),
+    width=st.floats(0.01, 0.07),
+    yaw=st.floats(-math.pi, math.pi),
+)
+def test_the_grasp_from_above_keeps_the_palm_off_the_part_and_the_tips_off_its_support(
+    height, width, yaw
+):
+    # a box standing on z = 0.4; the top grasps (tool z down) at each back-off
+    size = np.array([width, width, height])
+    pose = translation(0.3, -0.1, 0.4) @ rot_z(yaw)
+    poses = grasp_poses(
+        pose, np.zeros(3), size, size / 2, opening=0.08, backoffs=BACKOFFS,
+        palm=PALM, tips=TIPS, margin=MARGIN,
+    )  # fmt: skip
+    top = [g for g in poses if g.tool[2, 2] < -1 + 1e-9]
+    assert len(top) == 2 * 2 * len(BACKOFFS)  # 2 finger directions x 2 senses
+    lowest = min(g.tool[2, 3] for g in top)
+    palm_face, tip = lowest + PALM, lowest - TIPS  # along the vertical tool axis
+    assert palm_face >= 0.4 + height + MARGIN - 1e-12  # over the part's top
+    assert tip >= 0.4 + MARGIN - 1e-12  # over the table the part stands on
+    # and no higher than that needs: the thesis's grasp point (the centroid) when the
+    # part is between 2 x (tips + margin) and 2 x (palm - margin) tall, else one of the
+    # two just kept
+    centre = 0.4 + height / 2
+    if 2 * (TIPS + MARGIN) <= height <= 2 * (PALM - MARGIN):
+        assert lowest == pytest.approx(centre, abs=1e-12)
+    else:
+        assert min(palm_face - (0.4 + height), tip - 0.4) == pytest.approx(MARGIN, abs=1e-12)
+    # the fingers hold it: below its top they reach as far as the thesis's grasp at the
+    # centroid would, or the whole finger, or the whole part (less the margin)
+    held = min(height / 2 + TIPS, PALM + TIPS, height) - MARGIN
+    assert 0.4 + height - tip >= held - 1e-12

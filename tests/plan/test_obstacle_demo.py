@@ -2,7 +2,7 @@
 
 References: the wall stands between the stages, so the direct program's collisions
 involve it; every planned path is re-checked at 10x the frame density by plain MuJoCo on
-the exported MJCF (``workcell.plan.scenes.penetrations``).
+the exported MJCF (``workcell.examples.plan_problems.penetrations``).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from PIL import Image
 
 from workcell.cli import main
 from workcell.examples import obstacle
-from workcell.plan.scenes import ROBOT, penetrations, random_problem
+from workcell.examples.plan_problems import ROBOT, penetrations, random_problem
 from workcell.sim import Simulator
 
 

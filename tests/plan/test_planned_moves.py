@@ -1,8 +1,8 @@
 """``plan=True`` on the simulator's moves: collision-free, reproducible, failing cleanly.
 
 References: the independent re-check of every frame interval at 10x density with plain
-MuJoCo on the exported MJCF (``workcell.plan.scenes.penetrations``); the goal given; the
-direct move's collisions as the simulator reports them.
+MuJoCo on the exported MJCF (``workcell.examples.plan_problems.penetrations``); the goal
+given; the direct move's collisions as the simulator reports them.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pytest
 
 from workcell.errors import JointLimitError, PlanningError, ProgramError
 from workcell.examples import obstacle
-from workcell.plan.scenes import penetrations
+from workcell.examples.plan_problems import penetrations
 from workcell.sim import Simulator
 from workcell.sim.grasp import tool_down
 

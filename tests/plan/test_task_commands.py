@@ -185,3 +185,42 @@ def test_library_arms_pick_and_place_too(model, x):
     # centroid over the stage's centre (x, 0.26), lowest face on its top (z = 0.5)
     np.testing.assert_allclose(sim.part_positions()["cube"], [x, 0.26, 0.52], atol=1e-6)
     assert no_collisions(sim) == []
+
+
+def tall_part_cell(x: float = 0.255, model: str = "puma260") -> Workcell:
+    """A 50 x 50 x 80 mm block on a table beside a stage, an arm with the default gripper
+    (its fingers 50 mm long, the TCP 12.5 mm from their tips: the block is taller than
+    twice the 37.5 mm from the TCP back to the palm)."""
+    cell = Workcell("tall")
+    m = cell.model
+    solids.box(m, "table", size=(0.8, 0.8, 0.4))
+    solids.box(m, "stage", size=(0.12, 0.12, 0.1))
+    solids.box(m, "brick", size=(0.05, 0.05, 0.08))
+    cell.add_static("table", "table", spatial.translation(-0.3, -0.4, 0.0))
+    cell.add_static("stage", "stage", spatial.translation(0.22, 0.14, 0.4))
+    cell.add_movable("brick", "brick", spatial.translation(x, -0.225, 0.4), density=2700.0)
+    cell.add_robot("arm", model, gripper=True, base=spatial.translation(0.0, 0.0, 0.4))
+    return cell
+
+
+def test_a_part_taller_than_the_fingers_is_held_by_the_fingers_alone():
+    # the user's steps: pick the tall block and put it on the stage; the grasp at its
+    # centroid drove the palm 2.5 mm into it (collisions at the grasp and the release)
+    from workcell.examples.plan_problems import penetrations
+
+    sim = Simulator(tall_part_cell())
+    sim.pick("arm", "brick")
+    tool = sim.tool_pose("arm")
+    top = sim.part_positions()["brick"][2] + 0.04
+    palm_face = tool[2, 3] + 0.0375  # tool z points down: the palm is above the TCP
+    assert tool[2, 2] == pytest.approx(-1.0)
+    assert palm_face - top == pytest.approx(sim.set_planning()["near_clearance"], abs=1e-6)
+    assert top - (tool[2, 3] - 0.0125) > 0.04  # the finger tips well down its sides
+    sim.place("arm", "brick", on="stage")
+    assert no_collisions(sim) == []
+    # the stage's top is z = 0.5: the block's centroid 40 mm above it
+    np.testing.assert_allclose(sim.part_positions()["brick"], [0.28, 0.2, 0.54], atol=1e-6)
+    # plain MuJoCo on the exported cell, every frame interval at 4x: nothing overlaps
+    samples, bad, found = penetrations(sim, density=4)
+    assert samples > 1000
+    assert (bad, found) == (0, [])

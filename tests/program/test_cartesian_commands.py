@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import needs_cartesian, needs_pick_place, snapshot
+from program_helpers import needs_cartesian, needs_pick_place, snapshot
 
 from workcell import GraspError, ProgramError, UnreachableError
 from workcell.program import Session, Target, from_wire

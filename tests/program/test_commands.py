@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import EXAMPLE1_SIM_TIME, snapshot
+from program_helpers import EXAMPLE1_SIM_TIME, snapshot
 
 from workcell import JointLimitError, ModelError, ProgramError, WorkcellError, spatial
 from workcell.examples import thesis_joints
@@ -318,3 +318,30 @@ def test_a_session_handed_a_simulator_drives_it(session):
     assert s.execute(simc.SimTime()) == pytest.approx(EXAMPLE1_SIM_TIME)
     with pytest.raises(ProgramError):
         Session(sim=sim, cell=thesis_joints.build())
+
+
+def test_cell_save_during_a_simulation_saves_the_cell_as_set_up_and_says_so(tmp_path):
+    # the user's steps: a cell, a simulation that moves the robot, `cell save`
+    from workcell import Workcell
+    from workcell.program.interpreter import Interpreter
+
+    said: list[str] = []
+    interp = Interpreter(Session(base_dir=tmp_path), out=said.append)
+    for line in (
+        "cell example joints",
+        "simulate path dt 0.01",
+        "cell save before.json",  # nothing has moved yet: the path alone
+        "move joints relative puma 10 0 0 0 0 0",
+        "cell save during.json",
+    ):
+        interp.run_line(line)
+    assert said[-2] == str(tmp_path / "before.json")  # (a move prints nothing)
+    assert said[-1] == (
+        f"{tmp_path / 'during.json'}: the cell as set up (the state programs start from); "
+        "the simulation's state at t = 0.581776 s is not in it"
+    )  # 10 deg at the thesis's 0.3 rad/s: 0.5818 s
+    initial = np.radians([0, 0, -90, 0, 90, 0])  # example 1's robot as set up
+    for name in ("before.json", "during.json"):
+        saved = Workcell.load(tmp_path / name)
+        np.testing.assert_allclose(saved.robots["puma"].q, initial, atol=1e-12)
+    assert not np.allclose(interp.session.sim.joints("puma"), initial)

@@ -6,9 +6,9 @@ from __future__ import annotations
 import functools
 
 import pytest
-from conftest import snapshot
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from program_helpers import snapshot
 
 from workcell import WorkcellError
 from workcell.program import Command, Session

@@ -234,3 +234,28 @@ def test_help_lists_every_command_and_says_the_units():
     assert "example: move joints" in one_
     assert "create" not in one_.split("Units:")[0]
     assert "no command starts with" in help_text(("frob",))
+
+
+def test_a_robot_without_named_poses_says_so_in_words():
+    # the user's step: `move joints absolute r home` for a robot that has no named poses
+    # (read "valid here: none: no pose:robot yet" before)
+    from dataclasses import replace
+
+    from workcell import Workcell
+    from workcell.robots import get
+
+    s = Session()
+    s.cell = Workcell("c")
+    s.cell.add_robot("r", replace(get("puma260"), poses={}))
+    with pytest.raises(CommandSyntaxError) as info:
+        list(parse_line("move joints absolute r home", s))
+    first = str(info.value).splitlines()[0]
+    assert first.endswith(
+        "unknown pose name 'home'; valid here: none (robot 'r' has no named poses)"
+    )
+    s.cell = Workcell("empty")
+    with pytest.raises(CommandSyntaxError) as info:
+        list(parse_line("move joints absolute r home", s))
+    assert str(info.value).splitlines()[0].endswith(
+        "unknown robot 'r'; valid here: none (no robot yet)"
+    )

@@ -8,7 +8,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from conftest import EXAMPLE1_SIM_TIME
+from program_helpers import EXAMPLE1_SIM_TIME
 
 from workcell.program.server import Server
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import EXAMPLE1_SIM_TIME, needs_handoff, needs_pick_place
+from program_helpers import EXAMPLE1_SIM_TIME, needs_handoff, needs_pick_place
 
 from workcell import JointLimitError, ModelError, ProgramError
 from workcell.program.interpreter import check_script, run_script

@@ -12,7 +12,7 @@ import threading
 
 import numpy as np
 import pytest
-from conftest import EXAMPLE1_SIM_TIME
+from program_helpers import EXAMPLE1_SIM_TIME
 
 from workcell import JointLimitError, ModelError, ProgramError, ProtocolError
 from workcell.client import Client

@@ -402,6 +402,7 @@ def test_the_security_section_states_what_the_code_does():
         f"| listen backlog | {Server.request_queue_size} |",
         f"| connections served at once | {srv_module.MAX_CONNECTIONS} (`--max-connections N`) |",
         f"| time to complete the hello | {srv_module.HELLO_TIMEOUT:g} s |",
+        f"| connections waiting for their hello | {srv_module.MAX_WAITING} |",
         f"{srv_module.IDLE_TIMEOUT:g} s (`--idle-timeout S`)",
         f"answered ever later ({srv_module.BAD_TOKEN_DELAY:g} s, then",
         f"{MAX_MESSAGE_BYTES:,} bytes",
@@ -417,6 +418,12 @@ def test_the_security_section_states_what_the_code_does():
         f"| `max_sim_time` | {DEFAULTS.max_sim_time:.0e} s |".replace("e+0", "e"),
         f"| `max_file_bytes` | {DEFAULTS.max_file_bytes >> 20} MiB |",
         f"| `max_coordinate` | {DEFAULTS.max_coordinate:.0e} m |".replace("e+0", "e"),
+        *(
+            f"| `{name}` | {getattr(DEFAULTS, name):,} |"
+            for name in ("max_path_samples", "max_candidates", "max_workers", "max_images")
+        ),
+        f"| `max_pixels` | {DEFAULTS.max_pixels:,} |",
+        f"| `max_line_chars` | {DEFAULTS.max_line_chars:,} |",
     ]
     for fact in facts:
         assert fact in section, fact

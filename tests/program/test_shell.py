@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import EXAMPLE1_SIM_TIME
+from program_helpers import EXAMPLE1_SIM_TIME
 
 from workcell.program import Session
 from workcell.program.cli import register

@@ -45,7 +45,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def _two_puma_cell() -> Workcell:
     spec = importlib.util.spec_from_file_location(
-        "_cell_conftest", ROOT / "tests" / "cell" / "conftest.py"
+        "_cell_helpers", ROOT / "tests" / "cell" / "cell_helpers.py"
     )
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -215,3 +215,18 @@ def arm_mjcf(*, mesh: str = "meshes/arm.stl", extra_body: str = "", gripper: boo
   </keyframe>
 </mujoco>
 """
+
+
+def urdf_fk(path, joint_names, Q, tip="tool0", base="base_link") -> np.ndarray:
+    """Poses (m, 4, 4) of link ``tip`` in link ``base`` of URDF file ``path`` at joint rows
+    Q (m, n) of the joints ``joint_names``, by yourdfpy (an independent URDF reader)."""
+    import yourdfpy
+
+    u = yourdfpy.URDF.load(
+        str(path), load_meshes=False, build_scene_graph=True, load_collision_meshes=False
+    )
+    out = []
+    for q in Q:
+        u.update_cfg(dict(zip(joint_names, q, strict=True)))
+        out.append(u.get_transform(tip, base))
+    return np.array(out)

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from robot_files import urdf_fk
 
 from workcell import spatial
 from workcell.robots import Joint, Robot, get, library
@@ -258,19 +259,6 @@ def rtb_xacro() -> Path:
     import rtbdata
 
     return Path(rtbdata.__file__).parent / "xacro"
-
-
-def urdf_fk(path, joint_names, Q, tip="tool0", base="base_link"):
-    import yourdfpy
-
-    u = yourdfpy.URDF.load(
-        str(path), load_meshes=False, build_scene_graph=True, load_collision_meshes=False
-    )
-    out = []
-    for q in Q:
-        u.update_cfg(dict(zip(joint_names, q, strict=True)))
-        out.append(u.get_transform(tip, base))
-    return np.array(out)
 
 
 KUKA_JOINTS = [f"joint_a{i}" for i in range(1, 7)]

@@ -197,7 +197,7 @@ def _bad(tmp_path, text: str) -> Path:
         ),
         (
             lambda s: s.replace('file="meshes/arm.stl"', 'file="meshes/none.stl"'),
-            "MuJoCo cannot compile it",
+            "<mesh file='meshes/none.stl'>: cannot read mesh file .*none.stl': no such file",
         ),
         (
             lambda s: s.replace("<mujoco model", '<!DOCTYPE m [<!ENTITY a "b">]><mujoco model'),

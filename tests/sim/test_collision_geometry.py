@@ -14,7 +14,6 @@ import pytest
 from PIL import Image
 
 from workcell import Workcell, solids, spatial
-from workcell import decompose as dec
 from workcell.cell import compile_cell
 from workcell.cli import main
 from workcell.meshgeoms import collision_pieces
@@ -65,7 +64,7 @@ def test_a_cell_compiles_from_the_cache_the_second_time(monkeypatch):
     def no_coacd(*args, **kwargs):
         raise AssertionError("CoACD ran again")
 
-    monkeypatch.setattr(dec, "_run_coacd", no_coacd)
+    monkeypatch.setattr("workcell.native.run", no_coacd)
     again = compile_cell(cell)
     n = len(collision_pieces(cell.model, "bin").pieces)
     for cc in (first, again):

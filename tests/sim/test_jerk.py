@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from motion_helpers import (
     ACCELERATION,
@@ -19,7 +19,7 @@ from motion_helpers import (
 
 from workcell import ProgramError
 from workcell.sim.jerk import Limits
-from workcell.sim.planning import plan_move
+from workcell.sim.planning import STILL, plan_move
 
 SETTINGS = settings(max_examples=40, deadline=None)
 limit = st.floats(0.2, 20.0)
@@ -53,7 +53,13 @@ def test_a_move_on_the_boundary_between_profile_shapes_is_planned(a, j):
     d=st.lists(st.floats(-3.0, 3.0), min_size=6, max_size=6),
     f=st.lists(st.floats(0.2, 1.0), min_size=3, max_size=3),
 )
+# found by hypothesis: a 1.6e-33 rad move (ruckig: 0 s; the seven-phase time: 7.1e-12 s)
+@example(d=[0.0, 0.0, 0.0, 1.6e-33, 0.0, 0.0], f=[1.0, 1.0, 1.0])
+@example(d=[0.0, -STILL, 0.0, 0.0, 0.0, 0.0], f=[0.2, 0.2, 0.2])  # still no move
+@example(d=[0.0, 0.0, 2 * STILL, 0.0, 0.0, 0.0], f=[0.2, 0.2, 0.2])  # a move
 def test_the_joints_finish_together_at_the_slowest_joints_own_minimum_time(d, f):
+    # a move whose joints all move at most STILL (1e-12 rad) is no move (sim.planning's
+    # doc says why); any other takes the slowest joint's own seven-phase minimum time
     d = np.array(d)
     lim = Limits(SPEED * f[0], ACCELERATION * f[1], JERK * f[2])
     m = plan_move(np.zeros(6), d, speed=1.0, dt=0.01, profile="jerk", limits=lim)
@@ -61,9 +67,27 @@ def test_the_joints_finish_together_at_the_slowest_joints_own_minimum_time(d, f)
         seven_phase_time(abs(x), v, a, j)
         for x, v, a, j in zip(d, lim.speed, lim.acceleration, lim.jerk, strict=True)
     ]
+    if np.abs(d).max() <= 1e-12:
+        assert m.duration == 0.0
+        assert len(m.t) == 0
+        return
     assert m.duration == pytest.approx(max(alone), rel=1e-9, abs=1e-12)
-    if m.duration:
-        assert np.array_equal(m.rows_of()[-1], d)  # the last frame is the target exactly
+    assert np.array_equal(m.rows_of()[-1], d)  # the last frame is the target exactly
+
+
+@pytest.mark.parametrize("profile", ["linear", "trapezoid", "quintic", "jerk"])
+@pytest.mark.parametrize("mode", ["path", "joint-by-joint"])
+def test_a_sub_picoradian_move_is_no_move_in_every_profile_and_mode(profile, mode):
+    # the user's step: a move to where the robot is, but for 1.6e-33 rad on one joint
+    sim = make(profile=profile)
+    sim.set_mode(mode)
+    frames, t = sim.frames, sim.sim_time
+    sim.move_joints_absolute("puma", HOME + np.array([0, 0, 0, 1.6e-33, 0, 0]))
+    sim.move_joints_relative("puma", np.array([0, 1e-12, 0, 0, 0, 0]))
+    assert (sim.frames, sim.sim_time) == (frames, t)
+    sim.move_joints_relative("puma", np.array([0, 2e-12, 0, 0, 0, 0]))  # one that moves
+    assert sim.frames > frames
+    assert sim.sim_time > t
 
 
 def test_a_move_keeps_every_limit_in_every_frame():

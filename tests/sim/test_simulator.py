@@ -485,3 +485,26 @@ def test_a_release_event_says_where_the_centroid_was_set_down():
     on_stage = [*pp.STAGE_1_CENTRE, pp.STAGE_1_TOP + pp.CUBE_SIZE / 2]  # cube on stage 1
     assert where == pytest.approx(on_stage, abs=1e-4)
     assert sim.part_positions()["cube"] == pytest.approx(on_stage, abs=1e-6)
+
+
+def test_read_outs_are_calls_and_the_contract_spellings_still_work():
+    # read-outs of a run are calls: events(), summary(), cycle_time(), part_positions();
+    # `sim.events` (DESIGN's contract: "sim.events gets ... event") is the same tuple
+    import warnings
+
+    sim = thesis_joints.run()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # neither spelling warns: both are contracts
+        listed = sim.events()
+        attribute = sim.events
+        summary = sim.summary()
+    assert listed == attribute
+    assert isinstance(attribute, tuple)
+    assert [e.kind for e in attribute] == [e.kind for e in listed]
+    assert attribute[-1] == listed[-1]
+    assert len(attribute) == len(summary["events"]) == 4  # speed and three moves
+    assert [e.to_dict() for e in sim.events()] == summary["events"]
+    assert summary["commands"] == sim.cycle_time()["commands"]
+    # a new event shows in both spellings at once
+    sim.wait(1.0)
+    assert sim.events[-1].kind == sim.events()[-1].kind == "wait"

@@ -129,3 +129,42 @@ def test_the_progress_bar_shows_the_running_best(capsys):
     err = capsys.readouterr().err
     assert "3/3" in err
     assert f"best {best:.3f} s" in err
+
+
+TALL_PICK_PLACE = """# a 50 x 50 x 80 mm brick off a table onto a stage, task level
+cell new tall
+create box table size 0.8 0.8 0.4
+create box stage size 0.12 0.12 0.1
+create box brick size 0.05 0.05 0.08
+add static table table translate -0.3 -0.4 0
+add static stage stage translate 0.22 0.14 0.4
+add movable brick brick density 2700 translate 0.255 -0.225 0.4
+add robot arm puma260 gripper translate 0 0 0.4
+simulate path dt 0.02
+pick brick with arm
+place brick on stage with arm
+"""
+ROBOTS = ("puma260", "ur3e", "kuka_kr6_r700", "abb_irb120", "fanuc_lrmate200id")
+
+
+def test_a_pick_and_place_study_of_a_tall_part_over_five_robots_has_feasible_rows(
+    tmp_path, capsys
+):
+    # the user's steps (issue 19): every row was a CollisionError, the palm in the part
+    script = tmp_path / "tall.wcl"
+    script.write_text(TALL_PICK_PLACE)
+    args = [
+        "study", "--program", str(script), "--vary", f"arm.robot={','.join(ROBOTS)}",
+        "--vary", "brick.x=0.225,0.255,0.285", "--backend", "serial", "--no-plots",
+        "--out", str(tmp_path / "out"),
+    ]  # fmt: skip
+    assert main(args) == 0
+    assert "15 of 15 candidates feasible" in capsys.readouterr().out
+    rows = pq.read_table(tmp_path / "out" / "results.parquet").to_pylist()
+    assert sorted((r["arm.robot"], r["brick.x"]) for r in rows) == sorted(
+        (m, x) for m in ROBOTS for x in (0.225, 0.255, 0.285)
+    )
+    for r in rows:
+        assert r["feasible"], r["error"]
+        assert r["cycle_time_s"] > 1.0
+        assert r["min_clearance_m"] > 0.0

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from workcell.errors import StudyError
+from workcell.errors import LimitError, StudyError
 from workcell.study import Study, parameter
 from workcell.study.spec import parse_vary
 
@@ -70,7 +70,7 @@ def test_study_checks():
         Study(cell="joints", vary=["puma.base.x=0,1", "puma.base.x=2"])
     with pytest.raises(StudyError, match="sample=N"):
         Study(cell="joints", vary={"puma.base.x": "0:1"})
-    with pytest.raises(StudyError, match="more than"):
+    with pytest.raises(LimitError, match="over the limit max_candidates"):  # the one budget
         Study(cell="joints", vary={"puma.base.x": (0, 1, 1001), "puma.base.y": (0, 1, 1001)})
     with pytest.raises(StudyError, match="sample must be"):
         Study(cell="joints", vary={"puma.base.x": "0,1"}, sample=0)

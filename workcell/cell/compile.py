@@ -64,6 +64,7 @@ from workcell.meshgeoms import (
     add_mesh_geoms,
     collision_meshes,
     collision_pieces,
+    decompose_ahead,
 )
 from workcell.modeller.model import Model
 from workcell.robots.mjcf import (
@@ -213,6 +214,8 @@ def _build(cell: Workcell, timestep: float, concavity: float) -> CompiledCell:
     )
     spec.worldbody.add_light(name="light", pos=[0, 0, 3], dir=[0, 0, -1])
     m = cell.model
+    parts = [*cell.static_parts.values(), *cell.movable_parts.values()]
+    decompose_ahead(m, [p.entity for p in parts], concavity)
     for p in cell.static_parts.values():
         _add_part_geoms(
             spec.worldbody, m, p.name, p.entity, p.colour, p.pose, 1000.0, reg, concavity

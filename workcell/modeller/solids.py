@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell import limits, spatial
-from workcell.checks import is_finite_number
+from workcell.checks import check_size, is_finite_number
 from workcell.errors import GeometryError
 from workcell.modeller.model import Model
 from workcell.modeller.patches import (
@@ -36,10 +36,12 @@ _FLIP = spatial.scaling(1.0, 1.0, -1.0)  # turns a placed surface over (front si
 
 
 def _positive(name: str, **values: float) -> None:
-    """Each value a number > 0 (not a bool, not a string), at most ``max_coordinate`` (m)."""
+    """Each value a number > 0 (not a bool, not a string), at least
+    :data:`~workcell.checks.MIN_LENGTH` and at most ``max_coordinate`` (m)."""
     for key, v in values.items():
         if not (is_finite_number(v) and v > 0):
             raise GeometryError(f"solid '{name}': {key} must be a positive number, got {v!r}")
+        check_size(f"solid '{name}'", key, float(v))
         limits.check("max_coordinate", float(v), f"solid '{name}': {key}")
 
 
@@ -177,6 +179,7 @@ def sphere(
 
     Latitude step alpha = pi / (2 n), longitude step beta = 2 pi / m; vertices on the sphere.
     """
+    _positive(name, radius=radius)  # its own name in messages (the ellipsoid's: a, b, c)
     return ellipsoid(model, name, radii=(radius, radius, radius), m=m, n=n, colour=colour)
 
 

@@ -1,17 +1,19 @@
-"""Collision-free motion and task-level commands (the thesis's future work, §6).
+"""Collision-free motion and the planners of task-level commands (the thesis's future
+work, §6), on plain values: the simulator calls them, they never import it.
 
-- :mod:`workcell.plan.scene`: collision checks of robots' configurations (planning scenes);
+- :mod:`workcell.plan.scene`: collision checks of robots' configurations (planning
+  scenes) in a copy of a simulator's state (:class:`~workcell.plan.scene.SceneSource`);
 - :mod:`workcell.plan.rrt`: OMPL's RRT-Connect and shortening, motions checked densely;
-- :mod:`workcell.plan.motion`: ``plan=True`` on the simulator's moves, ``set_planning``;
-- :mod:`workcell.plan.grasps`, :mod:`workcell.plan.choices`, :mod:`workcell.plan.tasks`:
-  ``pick``, ``place``, ``handover``;
-- :mod:`workcell.plan.support`, :mod:`workcell.plan.resting`: what parts rest on;
-- :mod:`workcell.plan.scenes`: seeded random planning problems and an independent re-check.
+- :mod:`workcell.plan.motion`: the planning settings and planned paths;
+- :mod:`workcell.plan.grasps`, :mod:`workcell.plan.choices`: grasp poses and what
+  task-level commands choose between;
+- :mod:`workcell.plan.support`: what parts rest on.
 
-The simulator mixes these in, and they use the simulator's modules: the simulator is
-imported first (below), so that whichever module is imported first, ``workcell.sim``
-finishes loading these mixins before they are used. The names below are imported on
-first use.
+The commands that use them are the simulator's: ``plan=True`` and ``set_planning``
+(:mod:`workcell.sim.planned`), ``pick``, ``place``, ``handover``
+(:mod:`workcell.sim.task_commands`), settling (:mod:`workcell.sim.resting`). Seeded
+random planning problems: :mod:`workcell.examples.plan_problems`. The names below are
+imported on first use.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-import workcell.sim  # noqa: F401  (first: see the module doc)
+from workcell.moved import moved
 
 __all__ = ["PlanningError", "PlanningOptions", "PlanningScene", "plan_path", "random_problem"]
 
@@ -28,14 +30,14 @@ _WHERE = {
     "PlanningOptions": "workcell.plan.motion",
     "PlanningScene": "workcell.plan.scene",
     "plan_path": "workcell.plan.rrt",
-    "random_problem": "workcell.plan.scenes",
 }
+_MOVED = moved(__name__, {"random_problem": "workcell.examples.plan_problems"})
 
 
 def __getattr__(name: str) -> Any:
     if name in _WHERE:
         return getattr(importlib.import_module(_WHERE[name]), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return _MOVED(name)
 
 
 def __dir__() -> list[str]:

@@ -35,7 +35,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["checks_needed", "plan_path", "segment_valid"]
+__all__ = ["checks_needed", "plan_path", "segment_failure", "segment_valid"]
 
 Array = NDArray[np.float64]
 _ROUNDS = 2  # shortening rounds
@@ -53,6 +53,14 @@ def segment_valid(
 ) -> bool:
     """Whether ``valid`` holds at the :func:`checks_needed` points of segment a-b (ends
     excluded), coarse to fine."""
+    return segment_failure(valid, a, b, radii, clearance) is None
+
+
+def segment_failure(
+    valid: Callable[[Array], bool], a: Array, b: Array, radii: Array, clearance: float
+) -> float | None:
+    """Where along segment a-b (a fraction in (0, 1)) a check of :func:`segment_valid`
+    fails (the first one found, coarse to fine), or None when all pass."""
     n = checks_needed(a, b, radii, clearance)
     stride = 1 << max(0, (n - 1).bit_length() - 1)
     d = b - a
@@ -60,10 +68,10 @@ def segment_valid(
     while stride >= 1:
         for i in range(stride, n, step):
             if not valid(a + d * (i / n)):
-                return False
+                return i / n
         stride //= 2
         step = 2 * stride
-    return True
+    return None
 
 
 def plan_path(

@@ -36,26 +36,53 @@ Units: metres, radians.
 from __future__ import annotations
 
 import copy
-from collections.abc import Iterable, Mapping
-from typing import TYPE_CHECKING
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any, Protocol
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell.cell.compile import CompiledCell
 from workcell.spatial import quat_from_matrix
 
-if TYPE_CHECKING:
-    from workcell.sim.simulator import Simulator
-
-__all__ = ["PlanningScene", "Violation"]
+__all__ = ["PlanningScene", "SceneSource", "Violation"]
 
 Array = NDArray[np.float64]
 Violation = tuple[str, str, float]  # (thing, thing, signed distance m)
 
 
+class _Contacts(Protocol):
+    tolerance: float  # m: the overlap allowed to things touching
+    colliding: Sequence[int]  # the collision geoms
+    labels: Sequence[str]  # each geom's thing label, by geom id
+
+
+class SceneSource(Protocol):
+    """What a :class:`PlanningScene` copies: a simulator's model, state and bookkeeping
+    (:class:`workcell.sim.Simulator` is one; the planners never import it). Joint and
+    free-joint addresses index ``data.qpos``; bodies are MuJoCo body ids."""
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    compiled: CompiledCell
+    contacts: _Contacts
+    _qadr: Mapping[str, NDArray[np.intp]]  # robot -> its arm joints' qpos addresses
+    _holds: Mapping[str, Any]  # robot -> what it holds (``.part``)
+    _gripper_tree: Mapping[str, set[int]]  # robot -> its gripper's bodies
+    _part_body: Mapping[str, int]  # movable part -> its body
+    _fingers: Mapping[str, NDArray[np.intp]]  # robot -> its fingers' qpos addresses
+    _free_adr: Mapping[str, int]  # movable part -> its free joint's qpos address
+
+    def _carried(self, name: str) -> list[tuple[int, int, Array, Array]]:
+        """(gripper body, free-joint qpos address, relative pos, quat) of what ``name``
+        carries."""
+        ...
+
+
 class PlanningScene:
-    """Validity of configurations of ``robots`` in a copy of ``sim``'s current state.
+    """Validity of configurations of ``robots`` in a copy of ``sim``'s current state
+    (``sim``: a :class:`SceneSource`, such as the simulator).
 
     ``clearance`` (m): the distance moving things keep from everything else;
     ``tolerance`` (m): the overlap allowed for pairs touching at the start (default: the
@@ -71,7 +98,7 @@ class PlanningScene:
 
     def __init__(
         self,
-        sim: Simulator,
+        sim: SceneSource,
         robots: Iterable[str],
         *,
         clearance: float,
@@ -120,7 +147,7 @@ class PlanningScene:
 
     def _set_contact_bits(
         self,
-        sim: Simulator,
+        sim: SceneSource,
         colliding: NDArray[np.intp],
         moving: set[int],
         pairs: set[tuple[str, str]],

@@ -11,7 +11,7 @@
   :mod:`workcell.client`).
 """
 
-from workcell.program import cellcommands, commands, simcommands, solidcommands
+from workcell.program import cellcommands, commands, progcommands, simcommands, solidcommands
 from workcell.program.base import COMMANDS, Command, from_wire
 from workcell.program.session import Session
 from workcell.program.targets import Target
@@ -24,6 +24,7 @@ __all__ = [
     "cellcommands",
     "commands",
     "from_wire",
+    "progcommands",
     "simcommands",
     "solidcommands",
 ]

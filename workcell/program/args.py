@@ -9,7 +9,7 @@ Units are SI throughout: metres, radians, seconds.
 
 from __future__ import annotations
 
-import math
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import field
 from typing import Any
@@ -71,10 +71,18 @@ def text(v: object, what: str) -> str:
 
 
 def file_name(v: object, what: str) -> str:
-    """A file name: a non-empty string without NUL, at most 4096 characters (the session
-    resolves it; a server keeps it inside its root folder)."""
+    """A file name: a non-empty string without NUL or a lone surrogate (which no file
+    system can store), at most 4096 characters (the session resolves it; a server keeps
+    it inside its root folder)."""
     if not isinstance(v, str) or not v.strip() or "\x00" in v or len(v) > 4096:
         raise ProgramError(f"{what} must be a file name (a non-empty string), got {_show(v)}")
+    try:
+        os.fsencode(v)
+    except UnicodeEncodeError:
+        raise ProgramError(
+            f"{what} must be a file name of valid text (no lone surrogate such as '\\ud800'), "
+            f"got {_show(v)}"
+        ) from None
     return v
 
 
@@ -134,9 +142,9 @@ def vector(v: object, what: str, n: int | None = None) -> tuple[float, ...]:
         v = v.tolist()
     if not isinstance(v, (list, tuple)) or not all(_is_number(x) for x in v):
         raise ProgramError(f"{what} must be a list of numbers, got {_show(v)}")
-    out = tuple(float(x) for x in v)
-    if not all(math.isfinite(x) for x in out):
+    if not all(is_finite_number(x) for x in v):  # nan, inf, an int too large for a float
         raise ProgramError(f"{what} must hold finite numbers, got {_show(v)}")
+    out = tuple(float(x) for x in v)
     if n is not None and len(out) != n:
         raise ProgramError(f"{what} must be {n} numbers, got {len(out)}")
     return out

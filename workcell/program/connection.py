@@ -27,8 +27,10 @@ from workcell.program.base import COMMANDS, command_class
 from workcell.program.protocol import (
     MAX_MESSAGE_BYTES,
     VERSION,
+    ReplyTooLargeError,
     decode_request,
     encode,
+    encode_bounded,
     error_reply,
     error_type,
     to_jsonable,
@@ -76,6 +78,11 @@ def clean_log_text(text: object, limit: int = 300) -> str:
     return s if len(s) <= limit else s[: limit - 3] + "..."
 
 
+def _closing(exc: WorkcellError) -> ProtocolError:
+    """``exc`` as the ProtocolError that closes a connection before its hello."""
+    return ProtocolError(f"{exc}; the connection is closed")
+
+
 class _Closing(Exception):  # noqa: N818 - control flow, not an error
     """Reply (if any) then close the connection; ``why`` goes to the log."""
 
@@ -93,6 +100,7 @@ class Connection(socketserver.StreamRequestHandler):
         super().setup()
         self.connection.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.connection.settimeout(self.server.idle_timeout)
+        self.evicted = self.server.eviction(self.request)  # set: make room, close
 
     def handle(self) -> None:
         srv = self.server
@@ -151,7 +159,14 @@ class Connection(socketserver.StreamRequestHandler):
                     error_reply(None, ProtocolError(f"closed after {secs:g} s without a request")),
                     f"idle for {secs:g} s",
                 ) from None
-            if not line or self.expired:
+            if not line or self.expired or self.evicted.is_set():
+                if self.evicted.is_set() and not self.greeted:
+                    raise _Closing(
+                        error_reply(None, ProtocolError(
+                            "closed before its hello to make room for a new connection"
+                        )),
+                        "closed before its hello: room made for a new connection",
+                    )  # fmt: skip
                 if self.expired:
                     secs = self.server.hello_timeout
                     raise _Closing(
@@ -187,16 +202,12 @@ class Connection(socketserver.StreamRequestHandler):
     def _send(self, message: dict[str, Any]) -> None:
         rid = message.get("id")
         try:
-            data = encode(message)
-        except (ProtocolError, ValueError, TypeError) as exc:
-            data = encode(error_reply(rid, ProtocolError(f"result not sendable: {exc}")))
-        if len(data) > MAX_MESSAGE_BYTES:
-            exc = ProtocolError(
-                f"the reply is {len(data):,} bytes, over the {MAX_MESSAGE_BYTES:,}-byte bound "
-                "(the command ran; ask for less)"
-            )
+            data = encode_bounded(message, MAX_MESSAGE_BYTES)  # stops at the bound
+        except ReplyTooLargeError as exc:
             self._log_error(rid, "-", exc)
             data = encode(error_reply(rid, exc))
+        except (ProtocolError, ValueError, TypeError) as exc:
+            data = encode(error_reply(rid, ProtocolError(f"result not sendable: {exc}")))
         self.wfile.write(data)
         self.wfile.flush()
 
@@ -208,22 +219,40 @@ class Connection(socketserver.StreamRequestHandler):
         log.warning("connection %d: %s", self.cid, clean_log_text(exc))
         return error_reply(rid, exc)
 
+    def _first(self, line: bytes) -> dict[str, Any]:
+        """The reply to the first line, which must be a good hello; anything else (a line
+        that is not a request, another command, a hello refused for any reason) closes
+        the connection with one reply and one short log line, running nothing."""
+        try:
+            req = decode_request(line)
+        except ProtocolError as exc:  # an HTTP request, any text: never run a thing
+            raise _Closing(
+                self._not_a_hello(None, f"no protocol message ({exc})"), "not a hello"
+            ) from None
+        if req.command != "hello":
+            what = f"command {clean_log_text(repr(req.command), 60)}"
+            raise _Closing(self._not_a_hello(req.id, what), "not a hello")
+        try:
+            return {"id": req.id, "result": self._hello(req.id, req.args)}
+        except _Closing:
+            raise
+        except WorkcellError as exc:
+            log.warning("connection %d: hello refused: %s", self.cid, clean_log_text(exc))
+            raise _Closing(error_reply(req.id, _closing(exc)), "hello refused") from None
+        except Exception as exc:  # our bug: one line, no traceback for an unauthenticated client
+            log.warning("connection %d: hello failed: %s", self.cid, type(exc).__name__)
+            exc = ProtocolError("the hello could not be answered; the connection is closed")
+            raise _Closing(error_reply(req.id, exc), "hello failed") from None
+
     def _answer(self, line: bytes) -> tuple[dict[str, Any], bool]:
+        if not self.greeted:
+            return self._first(line), False
         rid, command = None, "-"
         try:
-            try:
-                req = decode_request(line)
-            except ProtocolError:
-                if not self.greeted:  # an HTTP request, any text: never run a thing
-                    raise _Closing(
-                        self._not_a_hello(None, "no protocol message"), "not a hello"
-                    ) from None
-                raise
+            req = decode_request(line)
             rid, command = req.id, req.command
             if req.command == "hello":
                 return {"id": rid, "result": self._hello(rid, req.args)}, False
-            if not self.greeted:
-                raise _Closing(self._not_a_hello(rid, f"command {req.command!r}"), "not a hello")
             if req.command == "bye":
                 return {"id": rid, "result": None}, True
             if req.command == "commands":
@@ -260,13 +289,14 @@ class Connection(socketserver.StreamRequestHandler):
         version = args.get("version", VERSION)
         if version != VERSION:
             raise ProtocolError(
-                f"protocol version {version!r} unknown; this server speaks {VERSION}"
+                f"protocol version {clean_log_text(repr(version), 40)} unknown; this server "
+                f"speaks {VERSION}"
             )
         if srv.token is not None and not self.greeted:  # a later hello: version only
             token = args.get("token")
             given = token.encode("utf-8", "surrogatepass") if isinstance(token, str) else b""
             if not hmac.compare_digest(given, srv.token.encode()):
-                slept = srv.throttle.failed(self.addr)
+                slept = srv.throttle.failed(self.addr, self.evicted)
                 log.warning(
                     "connection %d: wrong or missing token (answered after %.1f s)", self.cid, slept
                 )
@@ -279,6 +309,8 @@ class Connection(socketserver.StreamRequestHandler):
             srv.throttle.succeeded(self.addr)
         self.timer.cancel()  # the hello came: making the session may take its time
         if not self.greeted:
+            if not srv.admit(self.request):
+                raise _Closing(error_reply(rid, srv.busy_error()), "server busy")
             self.session = srv.new_session()
             self.greeted = True
         return srv.hello()

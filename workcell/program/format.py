@@ -68,6 +68,14 @@ def format_result(command: Command, result: Any, session: Session | None = None)
         return ""  # a created or renamed thing's own name: nothing new to say
     if isinstance(command, (cellc.ExampleCell, cellc.LoadCell)) and session is not None:
         return repr(session.cell)
+    if isinstance(command, cellc.SaveCell):
+        sim = session.sim if session is not None else None
+        if sim is not None and sim.frames > 1:  # say what a save mid-simulation holds
+            return (
+                f"{result}: the cell as set up (the state programs start from); the "
+                f"simulation's state at t = {sim.sim_time:.6g} s is not in it"
+            )
+        return str(result)
     if isinstance(command, simc.Joints):
         return _joints(result, session, command.robot)
     if isinstance(command, simc.ToolPose):

@@ -190,8 +190,9 @@ MOVE = Keys(
             ),
             f"move end_effector ROBOT {POSE_SYNTAX} [config CFG] [plan] [zone Z]",
             "move the tool to a pose (inverse kinematics, then a joint move); "
-            "config: Puma solution letters l|r u|d n|f; plan: along a collision-free path; "
-            "zone: blend into the next move",
+            "config: configuration letters l|r u|d n|f (default: the nearest solution whose "
+            "joint move is clear); plan: along a collision-free path; zone: blend into the "
+            "next move",
             "move end_effector puma at 0.4 0 0.3 down",
             Options(
                 {

@@ -16,12 +16,13 @@ from __future__ import annotations
 
 from typing import Any
 
+from workcell.program import progcommands as progc
 from workcell.program import simcommands as simc
 from workcell.program.grammar_cell import ADD, CELL
 from workcell.program.grammar_motion import JOG, MOVE, OVERRIDE, PROFILE, SPEED, robot_leaf
 from workcell.program.grammar_tasks import CLOSE, HANDOVER, OPEN, PICK, PLACE, PLANNING
 from workcell.program.keytree import Keys, Leaf, Node, Options, Seq, Set
-from workcell.program.params import Choice, Name, Number
+from workcell.program.params import Choice, Name, Number, Text
 
 __all__ = ["ALIASES", "BRANCHES"]
 
@@ -57,6 +58,35 @@ _SIMULATE = Keys(
 )
 
 
+_LANGUAGE = Options({"language": Choice("language", {k: k for k in progc.LANGUAGES})})
+_EXPORT = Keys(
+    {
+        "program": robot_leaf(
+            lambda v: progc.ExportProgram(v["robot"], v["path"], v.get("language")),
+            "export program ROBOT FILE [language urscript|krl|rapid|fanuc_ls]",
+            "write the robot's program as it ran in URScript, KRL (.src and .dat), RAPID or "
+            "FANUC TP (default: from the suffix .script, .src, .mod, .ls; "
+            "docs/robot-programs.md)",
+            "export program puma pick.src",
+            Text("path"),
+            _LANGUAGE,
+        )
+    }
+)
+_RUN = Keys(
+    {
+        "program": robot_leaf(
+            lambda v: progc.RunRobotProgram(v["robot"], v["path"], v.get("language")),
+            "run program ROBOT FILE [language urscript|krl|rapid|fanuc_ls]",
+            "run a robot program (URScript, KRL, RAPID, FANUC LS) on the robot",
+            "run program puma pick.src",
+            Text("path"),
+            _LANGUAGE,
+        )
+    }
+)
+
+
 def _query(build: Any, syntax: str, summary: str) -> Leaf:
     return Leaf(build, syntax, summary, syntax)
 
@@ -85,6 +115,8 @@ BRANCHES: dict[str, Node] = {
     "place": PLACE,
     "handover": HANDOVER,
     "jog": JOG,
+    "export": _EXPORT,
+    "run": _RUN,
     "wait": Seq(
         Number("seconds", "time", what="seconds"),
         Leaf(

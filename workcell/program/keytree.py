@@ -53,7 +53,8 @@ class CommandSyntaxError(ProgramError):
         valid = f"; valid here: {', '.join(self.expected)}" if self.expected else ""
         text = f"{self.where}column {self.column}: {self.reason}{valid}"
         if self.line:
-            text += f"\n  {self.line}\n  {' ' * (self.column - 1)}^"
+            shown, caret = _window(self.line, self.column - 1)
+            text += f"\n  {shown}\n  {' ' * caret}^"
         return text
 
     def locate(self, where: str, line: str) -> CommandSyntaxError:
@@ -61,6 +62,17 @@ class CommandSyntaxError(ProgramError):
         self.where, self.line = where, line
         self.args = (self._text(),)
         return self
+
+
+def _window(line: str, at: int, width: int = 120) -> tuple[str, int]:
+    """At most ``width`` characters of ``line`` around index ``at`` (cut ends shown as
+    '...'), and where ``at`` falls in them: a long line is never echoed whole."""
+    if len(line) <= width:
+        return line, at
+    start = max(0, min(at - width // 2, len(line) - width))
+    head = "..." if start > 0 else ""
+    tail = "..." if start + width < len(line) else ""
+    return f"{head}{line[start : start + width]}{tail}", at - start + len(head)
 
 
 class _Mismatch(Exception):  # noqa: N818 - control flow inside the matcher, never escapes

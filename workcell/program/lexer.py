@@ -25,6 +25,7 @@ import re
 import unicodedata
 from dataclasses import dataclass
 
+from workcell import limits
 from workcell.errors import ProgramError
 
 __all__ = [
@@ -148,6 +149,7 @@ def split_commands(line: str) -> list[list[Token]]:
     Raises ProgramError (with the column) for an unterminated string or a character
     that could hide what the line does (see the module doc).
     """
+    limits.check("max_line_chars", len(line), "a command line")  # before any parsing
     _check_characters(line)
     commands: list[list[Token]] = [[]]
     i, n = 0, len(line)

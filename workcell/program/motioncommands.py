@@ -105,9 +105,10 @@ class MoveJointsRelative(Command, wire="move_joints_relative"):
 
 @dataclass(frozen=True)
 class MoveEndEffector(Command, wire="move_end_effector"):
-    """Move the tool to pose ``T`` (IK, then a joint move); ``config`` picks the Puma
-    solution (three letters l|r, u|d, n|f; default: the nearest); ``plan``: along a
-    collision-free path; ``zone`` (m): blend into the next move."""
+    """Move the tool to pose ``T`` (IK, then a joint move); ``config`` picks the
+    configuration (letters l|r, u|d, n|f; default: the nearest solution whose joint move
+    is clear, named in the move's event); ``plan``: along a collision-free path; ``zone``
+    (m): blend into the next move."""
 
     robot: str = arg(a.name)
     T: Target = arg(target)  # noqa: RUF009 - arg() returns a dataclasses.field

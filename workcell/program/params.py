@@ -48,8 +48,18 @@ class Name(Node):
         tok = _text_token(cur, self.what)
         known = None if self.new or self.kind is None else cur.names(self.kind)
         if known is not None and tok.content not in known:
-            cur.fail(f"unknown {self.what} '{tok.content}'", known or [f"none: no {self.kind} yet"])
+            cur.fail(f"unknown {self.what} '{tok.content}'", known or [self._none(cur)])
         cur.values[self.key] = cur.take().content
+
+    def _none(self, cur: Cursor) -> str:
+        """What "valid here" says when no name is known: why there is none."""
+        kind, _, key = (self.kind or "").partition(":")
+        owner = cur.values.get(key) if key else None
+        if kind == "pose" and owner:
+            return f"none (robot '{owner}' has no named poses)"
+        if kind == "relation" and owner:
+            return f"none ('{owner}' has no relations)"
+        return f"none (no {kind} yet)"
 
 
 class Ref(Node):

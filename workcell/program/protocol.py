@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,9 +26,11 @@ __all__ = [
     "MAX_MESSAGE_BYTES",
     "PROTOCOL",
     "VERSION",
+    "ReplyTooLargeError",
     "Request",
     "decode_request",
     "encode",
+    "encode_bounded",
     "error_class",
     "error_reply",
     "error_type",
@@ -65,6 +68,62 @@ def encode(message: dict[str, Any]) -> bytes:
     return json.dumps(to_jsonable(message), separators=(",", ":"), allow_nan=False).encode() + b"\n"
 
 
+class ReplyTooLargeError(ProtocolError):
+    """A reply went past the message bound while it was being encoded (``size``: bytes
+    encoded when it stopped)."""
+
+    def __init__(self, size: int, bound: int) -> None:
+        super().__init__(
+            f"the reply is over {size:,} bytes, over the {bound:,}-byte bound "
+            "(the command ran; ask for less)"
+        )
+        self.size = size
+
+
+_CHUNK = 4096  # numbers of an array encoded at a time
+
+
+def _parts(v: Any) -> Iterator[str]:
+    """The compact JSON of ``v`` (as :func:`encode` writes it) in pieces; a large array is
+    converted a few thousand numbers at a time, never whole."""
+    if isinstance(v, np.ndarray) and v.ndim >= 1 and v.size > _CHUNK:
+        yield "["
+        rows = max(1, _CHUNK // max(1, v[0].size))
+        for k in range(0, len(v), rows):
+            text = json.dumps(to_jsonable(v[k : k + rows]), separators=(",", ":"))
+            yield ("," if k else "") + text[1:-1]
+        yield "]"
+    elif isinstance(v, dict):
+        yield "{"
+        for k, (key, x) in enumerate(v.items()):
+            yield ("," if k else "") + json.dumps(str(key)) + ":"
+            yield from _parts(x)
+        yield "}"
+    elif isinstance(v, tuple) and hasattr(v, "_asdict"):
+        yield from _parts(v._asdict())
+    elif isinstance(v, (list, tuple)):
+        yield "["
+        for k, x in enumerate(v):
+            if k:
+                yield ","
+            yield from _parts(x)
+        yield "]"
+    else:
+        yield json.dumps(to_jsonable(v), separators=(",", ":"), allow_nan=False)
+
+
+def encode_bounded(message: dict[str, Any], bound: int = MAX_MESSAGE_BYTES) -> bytes:
+    """:func:`encode`, stopping with :class:`ReplyTooLargeError` as soon as the line passes
+    ``bound`` bytes (newline included): a huge result is never encoded whole."""
+    out, size = [], 1
+    for part in _parts(message):
+        size += len(part)  # ASCII: json escapes every other character
+        if size > bound:
+            raise ReplyTooLargeError(size, bound)
+        out.append(part)
+    return "".join(out).encode() + b"\n"
+
+
 @dataclass(frozen=True)
 class Request:
     """A decoded request: its ``id`` (echoed in the reply), ``command`` and ``args``."""
@@ -84,6 +143,11 @@ def decode_request(line: bytes) -> Request:
         msg = json.loads(text)
     except json.JSONDecodeError as exc:
         raise ProtocolError(f"malformed JSON at character {exc.pos + 1}: {exc.msg}") from exc
+    except RecursionError:
+        raise ProtocolError("malformed JSON: arrays or objects nested too deeply") from None
+    except ValueError as exc:  # an integer of more than 4300 digits
+        why = "an integer has more than 4300 digits" if "digits" in str(exc) else "a bad value"
+        raise ProtocolError(f"malformed JSON: {why}") from None
     if not isinstance(msg, dict):
         raise ProtocolError(
             f'a request is a JSON object {{"id", "command", "args"}}, got {type(msg).__name__}'
@@ -94,7 +158,9 @@ def decode_request(line: bytes) -> Request:
     version = msg.get("version", VERSION)
     if version != VERSION:
         raise _with_id(
-            ProtocolError(f"protocol version {version!r} unknown; this server speaks {VERSION}"),
+            ProtocolError(
+                f"protocol version {_short(version)} unknown; this server speaks {VERSION}"
+            ),
             rid,
         )
     command = msg.get("command")
@@ -108,6 +174,16 @@ def decode_request(line: bytes) -> Request:
             ProtocolError('"args" must be an object (by name) or an array (in order)'), rid
         )
     return Request(rid, command, args)
+
+
+def _short(v: Any) -> str:
+    """``repr(v)``, at most 40 characters (a reply never echoes a client's long value)."""
+    r = (
+        repr(v)
+        if not isinstance(v, int) or abs(v) < 10**30
+        else f"a {len(str(abs(v)))}-digit number"
+    )
+    return r if len(r) <= 40 else r[:37] + "..."
 
 
 def _with_id(exc: ProtocolError, rid: Any) -> ProtocolError:

@@ -121,7 +121,9 @@ class Events(Command, wire="events"):
     """The timeline's events, each {t (s), robot, kind, detail}."""
 
     def execute(self, session: Session) -> list[dict[str, Any]]:
-        return [e.to_dict() for e in session.require_sim().events]
+        events = session.require_sim().events
+        session.check_reply(4 * len(events), "events")  # 4 fields each
+        return [e.to_dict() for e in events]
 
 
 @dataclass(frozen=True)
@@ -170,6 +172,10 @@ class Trajectory(Command, wire="trajectory"):
     robot: str = arg(a.name)
 
     def execute(self, session: Session) -> dict[str, Any]:
+        sim = session.require_sim()
+        if self.robot in sim.robots:  # a server's reply bound, before anything is built
+            dof = sim.cell.robots[self.robot].robot.dof
+            session.check_reply(sim.frames * (dof + 1), f"trajectory '{self.robot}'")
         t, q = call_sim(session, "trajectory", self.robot)
         return {"t": t, "q": q}
 

@@ -14,10 +14,14 @@ Security (docs/protocol.md, "Security"): a token is required by default, also on
 loopback (made at start and kept in a user-only file that local clients read:
 :mod:`workcell.program.tokens`); a wrong token closes the connection, and repeated wrong
 tokens from one address are answered ever more slowly; file names resolve inside the
-``root`` folder; at most ``max_connections`` at once (more are refused with an error
-line); a connection without its hello after ``hello_timeout`` s, or without a request
-for ``idle_timeout`` s, is closed; replies are bounded like requests (1 MiB). The log
-(logger ``workcell.server``) has one line per connection and per error.
+``root`` folder; at most ``max_connections`` served at once (more are refused with an error
+line); connections that have not yet said hello have their own small pool
+(``max_waiting``): when it is full, a new connection closes the one that has waited
+longest, so connections without a token can never keep a token holder out; a connection
+without its hello after ``hello_timeout`` s, or without a request for ``idle_timeout``
+s, is closed; anything but a good hello as the first line closes the connection (one
+reply, one short log line); replies are bounded like requests (1 MiB). The log (logger
+``workcell.server``) has one line per connection and per error.
 
 Sessions: by default each connection gets its own :class:`Session` (made by
 ``session_factory`` after the hello), so clients cannot disturb each other; with
@@ -58,8 +62,9 @@ __all__ = ["Server", "describe_commands", "is_loopback"]
 log = logging.getLogger("workcell.server")
 
 MAX_CONNECTIONS = 16  # connections served at once; more are refused with an error line
+MAX_WAITING = 8  # connections waiting for their hello; a new one closes the oldest
 IDLE_TIMEOUT = 300.0  # s without a request (or without reading a reply) before closing
-HELLO_TIMEOUT = 10.0  # s a new connection has to complete its hello
+HELLO_TIMEOUT = 5.0  # s a new connection has to complete its hello
 BAD_TOKEN_DELAY = 0.5  # s before answering a first wrong token; doubles up to 8 s
 
 
@@ -72,8 +77,8 @@ class Server(socketserver.ThreadingTCPServer):
     ``token_path``), removed by :meth:`server_close`. ``root``: the folder file names of
     commands resolve in (default: the current folder). ``session_factory`` makes each
     connection's session (default: an empty Session); ``shared``: one session for all,
-    commands serialised. ``max_connections``, ``idle_timeout``, ``hello_timeout`` (s) and
-    ``bad_token_delay`` (s): see the module doc.
+    commands serialised. ``max_connections``, ``max_waiting``, ``idle_timeout``,
+    ``hello_timeout`` (s) and ``bad_token_delay`` (s): see the module doc.
     """
 
     daemon_threads = True
@@ -92,6 +97,7 @@ class Server(socketserver.ThreadingTCPServer):
         session_factory: Callable[[], Session] = Session,
         root: str | Path = ".",
         max_connections: int = MAX_CONNECTIONS,
+        max_waiting: int = MAX_WAITING,
         idle_timeout: float = IDLE_TIMEOUT,
         hello_timeout: float = HELLO_TIMEOUT,
         bad_token_delay: float = BAD_TOKEN_DELAY,
@@ -109,14 +115,18 @@ class Server(socketserver.ThreadingTCPServer):
         for what, v in (("idle_timeout", idle_timeout), ("hello_timeout", hello_timeout)):
             if not (isinstance(v, (int, float)) and v > 0):
                 raise ProgramError(f"{what} must be a number of seconds > 0, got {v!r}")
-        if not (isinstance(max_connections, int) and max_connections >= 1):
-            raise ProgramError(f"max_connections must be an integer >= 1, got {max_connections!r}")
+        for what, n in (("max_connections", max_connections), ("max_waiting", max_waiting)):
+            if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
+                raise ProgramError(f"{what} must be an integer >= 1, got {n!r}")
         if ":" in host:
             self.address_family = socket.AF_INET6
         self.token = token if token is not None or not require_token else new_token()
         self.session_factory = session_factory
         self.shared_session = self._rooted(session_factory()) if shared else None
         self.max_connections = max_connections
+        self.max_waiting = max_waiting
+        self._waiting: dict[Any, threading.Event] = {}  # socket -> its eviction, oldest first
+        self._admitted: set[Any] = set()
         self.idle_timeout = float(idle_timeout)
         self.hello_timeout = float(hello_timeout)
         self.throttle = Throttle(bad_token_delay)
@@ -137,6 +147,7 @@ class Server(socketserver.ThreadingTCPServer):
 
     def _rooted(self, session: Session) -> Session:
         session.root = self.root
+        session.reply_bytes = MAX_MESSAGE_BYTES
         return session
 
     def new_session(self) -> Session:
@@ -169,37 +180,71 @@ class Server(socketserver.ThreadingTCPServer):
             "idle_timeout_s": self.idle_timeout,
         }
 
+    def busy_error(self) -> ProtocolError:
+        return ProtocolError(
+            f"server busy: {self.max_connections} connections are open (the limit); try again later"
+        )
+
     def process_request(self, request: Any, client_address: Any) -> None:
+        oldest = None
         with self._count_lock:
             busy = self.active >= self.max_connections
             if not busy:
-                self.active += 1
+                if len(self._waiting) >= self.max_waiting:  # make room: close the oldest
+                    oldest = next(iter(self._waiting))
+                    self._waiting.pop(oldest).set()
+                self._waiting[request] = threading.Event()
+        if oldest is not None:
+            log.info("closing a connection that waited longest for its hello, to make room")
+            with contextlib.suppress(OSError):
+                oldest.shutdown(socket.SHUT_RD)
         if busy:  # refuse politely, here (no thread), never blocking the accept loop long
             log.warning("refused %s:%s: %d connections open", *client_address[:2], self.active)
-            exc = ProtocolError(
-                f"server busy: {self.max_connections} connections are open (the limit); "
-                "try again later"
-            )
             with contextlib.suppress(OSError):
                 request.settimeout(1.0)
-                request.sendall(encode(error_reply(None, exc)))
+                request.sendall(encode(error_reply(None, self.busy_error())))
             self.shutdown_request(request)
             return
         try:
             super().process_request(request, client_address)
         except BaseException:
-            self._release()
+            self._release(request)
             raise
+
+    def eviction(self, request: Any) -> threading.Event:
+        """The event set when ``request`` (a connection still without its hello) is
+        closed to make room (a fresh, unset one for a connection not in the pool)."""
+        with self._count_lock:
+            return self._waiting.get(request) or threading.Event()
+
+    def admit(self, request: Any) -> bool:
+        """Move a connection that said hello from the waiting pool to the served ones;
+        False when ``max_connections`` are served already."""
+        with self._count_lock:
+            self._waiting.pop(request, None)
+            if self.active >= self.max_connections:
+                return False
+            self.active += 1
+            self._admitted.add(request)
+            return True
+
+    @property
+    def waiting(self) -> int:
+        """Connections that have not yet said hello."""
+        return len(self._waiting)
 
     def process_request_thread(self, request: Any, client_address: Any) -> None:
         try:
             super().process_request_thread(request, client_address)
         finally:
-            self._release()
+            self._release(request)
 
-    def _release(self) -> None:
+    def _release(self, request: Any) -> None:
         with self._count_lock:
-            self.active -= 1
+            self._waiting.pop(request, None)
+            if request in self._admitted:
+                self._admitted.discard(request)
+                self.active -= 1
 
     def handle_error(self, request: Any, client_address: Any) -> None:
         """A connection's failure: one log line (a traceback only for a bug), never stderr."""

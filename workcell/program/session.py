@@ -17,8 +17,8 @@ import threading
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from workcell.errors import ProgramError, WorkcellError
-from workcell.files import resolve_inside
+from workcell.confine import confined, resolve_inside
+from workcell.errors import ProgramError, ProtocolError, WorkcellError
 from workcell.modeller.model import Model
 
 if TYPE_CHECKING:
@@ -59,6 +59,7 @@ class Session:
         self.sim = sim
         self.base_dir = Path(base_dir)
         self.root = None if root is None else Path(root)
+        self.reply_bytes: int | None = None  # a server's message bound (check_reply)
         self.lock = threading.RLock()
         self._block: tuple[Simulator, Any] | None = None
 
@@ -121,9 +122,22 @@ class Session:
         p = Path(path).expanduser()
         return p if p.is_absolute() else self.base_dir / p
 
+    def check_reply(self, numbers: int, what: str) -> None:
+        """Before a reply of at least ``numbers`` numbers is built: ProtocolError when it
+        cannot fit the session's ``reply_bytes`` (a server's message bound; each number
+        takes 2 bytes at least, a digit and a comma). Nothing to check without a bound."""
+        if self.reply_bytes is not None and 2 * numbers > self.reply_bytes:
+            raise ProtocolError(
+                f"{what}: the reply would be at least {2 * numbers:,} bytes ({numbers:,} "
+                f"numbers), over the {self.reply_bytes:,}-byte bound of a protocol message; "
+                "nothing was built: ask for less, or record the run to a file"
+            )
+
     def execute(self, command: Command) -> Any:
-        """Run one command under the session's lock and return its result."""
-        with self.lock:
+        """Run one command under the session's lock and return its result; with a
+        ``root``, every file the command reads must lie inside it
+        (:func:`workcell.confine.confined`)."""
+        with self.lock, confined(self.root):
             return command.execute(self)
 
     # ------------------------------------------------------------------ names (completion)

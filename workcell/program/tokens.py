@@ -6,7 +6,12 @@ where it is and writes ``server-PORT.json`` (``{"port", "host", "token", "pid"}`
 ``$XDG_RUNTIME_DIR/workcell``, else ``~/.local/share/workcell/runtime``. A client on the
 same machine, run by the same user, reads it (:func:`read_token_file`) and sends the
 token in its hello; other users cannot read it. The file is removed when the server
-stops.
+stops; the files of servers that died without removing theirs (kill -9, a crash) are
+removed when the next server starts (:func:`remove_stale_token_files`).
+
+A token the user chooses (:func:`given_token`) comes from a file (``--token-file``) or
+the environment (``WORKCELL_TOKEN``); ``--token TOKEN`` still works but puts the token
+on the command line, where every user of the machine sees it (``ps``).
 """
 
 from __future__ import annotations
@@ -21,14 +26,18 @@ import threading
 import time
 from pathlib import Path
 
-from workcell.errors import ProgramError
-from workcell.files import atomic_write_text
+from workcell import limits
+from workcell.errors import ProgramError, WorkcellError
+from workcell.files import atomic_write_text, read_text
+from workcell.tempfiles import process_alive
 
 __all__ = [
     "Throttle",
+    "given_token",
     "is_loopback",
     "new_token",
     "read_token_file",
+    "remove_stale_token_files",
     "remove_token_file",
     "runtime_dir",
     "token_file",
@@ -76,22 +85,96 @@ def write_token_file(port: int, host: str, token: str) -> Path:
             os.chmod(folder, 0o700)
     except OSError as exc:
         raise ProgramError(f"cannot create the token folder '{folder}': {exc.strerror}") from exc
+    remove_stale_token_files()
     path = token_file(port)
-    data = {"port": int(port), "host": host, "token": token, "pid": os.getpid()}
+    data = {
+        "port": int(port),
+        "host": host,
+        "token": token,
+        "pid": os.getpid(),
+        "machine": socket.gethostname(),
+    }
     atomic_write_text(path, json.dumps(data), error=ProgramError, mode=0o600)
     return path
+
+
+def _read(path: Path) -> dict | None:
+    try:
+        with limits.using(max_file_bytes=65536):
+            data = json.loads(read_text(path, what="token file", error=ProgramError))
+    except (WorkcellError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
 
 
 def read_token_file(port: int) -> str | None:
     """The token of the local server on ``port``, from its token file (None when there is
     no readable token file)."""
-    try:
-        with open(token_file(port), encoding="utf-8") as f:
-            data = json.loads(f.read(65536))
-    except (OSError, ValueError):
-        return None
-    token = data.get("token") if isinstance(data, dict) else None
+    data = _read(token_file(port))
+    token = None if data is None else data.get("token")
     return token if isinstance(token, str) else None
+
+
+def remove_stale_token_files() -> list[Path]:
+    """Remove the token files of this machine's servers that are no longer running (their
+    process died without removing its file: kill -9, a crash); return the files removed.
+    Files of live servers, of other machines (a home folder shared over the network) and
+    files that are not token files are left alone."""
+    removed = []
+    try:
+        paths = sorted(runtime_dir().glob("server-*.json"))
+    except OSError:
+        return removed
+    for path in paths:
+        data = _read(path)
+        pid = None if data is None else data.get("pid")
+        if data is None or data.get("machine") != socket.gethostname():
+            continue
+        if not isinstance(pid, int) or isinstance(pid, bool) or pid <= 0 or process_alive(pid):
+            continue
+        with contextlib.suppress(OSError):
+            path.unlink()
+            removed.append(path)
+    return removed
+
+
+def given_token(
+    token: str | None, token_file: str | None, environ: dict[str, str] | None = None
+) -> tuple[str | None, str | None]:
+    """The token the user chose for a server, and a warning to print (or None).
+
+    ``token_file``: a file whose first line is the token (its other lines are ignored);
+    else ``token`` (the ``--token`` option: every user of the machine sees it in the
+    process list, hence the warning); else ``WORKCELL_TOKEN`` from ``environ`` (default:
+    the process's); None when none is given (the server makes one). ProgramError for an
+    unreadable file or an empty token."""
+    env = os.environ if environ is None else environ
+    if token_file is not None and token is not None:
+        raise ProgramError("give the token by --token-file or --token, not both")
+    warning = None
+    if token_file is not None:
+        with limits.using(max_file_bytes=65536):
+            text = read_text(token_file, what="token file", error=ProgramError)
+        token = (text.splitlines() or [""])[0].strip()
+        if not token:
+            raise ProgramError(
+                f"the token file '{token_file}' is empty; its first line is the token"
+            )
+        st = os.stat(token_file)
+        if st.st_mode & 0o077:
+            warning = (
+                f"warning: the token file '{token_file}' can be read by other users "
+                f"(mode {st.st_mode & 0o777:o}); chmod 600 it"
+            )
+    elif token is not None:
+        warning = (
+            "warning: --token puts the token on the command line, where every user of this "
+            "machine can read it (ps); give it with --token-file FILE or the WORKCELL_TOKEN "
+            "environment variable instead"
+        )
+    else:
+        token = env.get("WORKCELL_TOKEN") or None
+    return token, warning
 
 
 def remove_token_file(port: int, token: str) -> None:
@@ -114,8 +197,9 @@ class Throttle:
         self._lock = threading.Lock()
         self._state: dict[str, tuple[int, float]] = {}  # address -> (failures, next answer)
 
-    def failed(self, addr: str) -> float:
-        """Sleep as long as this failure earns; return the seconds slept."""
+    def failed(self, addr: str, cancel: threading.Event | None = None) -> float:
+        """Sleep as long as this failure earns (or until ``cancel`` is set: the
+        connection was closed meanwhile); return the seconds waited."""
         with self._lock:
             n, ready = self._state.get(addr, (0, 0.0))
             now = time.monotonic()
@@ -123,7 +207,7 @@ class Throttle:
             self._state[addr] = (n + 1, ready)
         wait = ready - now
         if wait > 0:
-            time.sleep(wait)
+            (cancel or threading.Event()).wait(wait)
         return wait
 
     def succeeded(self, addr: str) -> None:

@@ -16,7 +16,7 @@ from workcell.errors import RecordError, RenderError
 
 _LAZY = {
     "RecordStats": "workcell.record.rerun_log",
-    "check_recording_path": "workcell.record.rerun_log",
+    "check_recording_path": "workcell.cli_common",
     "default_blueprint": "workcell.record.rerun_log",
     "log_timeline": "workcell.record.rerun_log",
     "record": "workcell.record.rerun_log",

@@ -12,26 +12,52 @@ more are hidden. A movable part
 counts ten times as much as a static one, and large static parts (tables, floors: a
 bounding radius over a quarter of the cell's extent) not at all: they are always partly
 behind something. Angles in degrees, sizes in pixels.
+
+:func:`named_view` turns a name into a view: a camera of the cell by its name, else one
+of the preset :data:`VIEWS`, each a free camera fitted like the overview (every given
+configuration in the picture) from a fixed direction: ``overview`` (the automatic
+azimuth), ``front`` (from -y), ``back`` (from +y), ``left`` (from -x), ``right`` (from +x),
+all looking down 20 degrees, and ``top`` (straight down, +y up in the picture). A cell
+camera of the same name wins.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell.errors import ModelError
 from workcell.meshgeoms import COLLISION_GROUP
 
-__all__ = ["AZIMUTH_STEP", "camera_eye", "occlusion", "overview_camera", "visual_points"]
+__all__ = [
+    "AZIMUTH_STEP",
+    "VIEWS",
+    "camera_eye",
+    "named_view",
+    "occlusion",
+    "overview_camera",
+    "visual_points",
+]
 
 AZIMUTH_STEP = 30.0  # deg between the azimuths tried
 _MOVABLE_WEIGHT = 10.0  # a hidden movable part costs as much as ten static ones
 _LARGE = 0.25  # a static geom whose bounding radius is over this x the cell's extent
 Array = NDArray[np.float64]
 _SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+_SIDE = -20.0  # deg: the preset side views look down this much
+# preset views: name -> overview_camera's azimuth and elevation (deg; none: its own)
+VIEWS: dict[str, dict[str, float]] = {
+    "overview": {},
+    "front": {"azimuth": 90.0, "elevation": _SIDE},
+    "back": {"azimuth": 270.0, "elevation": _SIDE},
+    "left": {"azimuth": 0.0, "elevation": _SIDE},
+    "right": {"azimuth": 180.0, "elevation": _SIDE},
+    "top": {"azimuth": 90.0, "elevation": -89.9},
+}
 
 
 def _visible_geoms(model: mujoco.MjModel) -> NDArray[np.intp]:
@@ -178,6 +204,31 @@ def overview_camera(
     cam.distance = d
     cam.azimuth, cam.elevation = azimuth % 360.0, elevation
     return cam
+
+
+def named_view(
+    model: mujoco.MjModel,
+    name: str | None,
+    qpos: Callable[[], Iterable[Array]] | None = None,
+    *,
+    width: int = 640,
+    height: int = 480,
+) -> str | mujoco.MjvCamera:
+    """The view ``name`` names (module doc): the cell camera's name itself, else the
+    preset view fitted over the configurations ``qpos()`` gives (default: ``qpos0``;
+    called only for a preset) for a ``width`` x ``height`` picture; None: ``overview``.
+    An unknown name: ModelError listing the cell's cameras and the preset views."""
+    if name is not None and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name) >= 0:
+        return name
+    view = VIEWS.get("overview" if name is None else name)
+    if view is None:
+        cams = [model.camera(i).name for i in range(model.ncam)]
+        raise ModelError(
+            f"no camera {name!r} in the cell and no such view; cameras: "
+            f"{', '.join(cams) or 'none'}; views: {', '.join(VIEWS)}"
+        )
+    configs = None if qpos is None else qpos()
+    return overview_camera(model, configs, width=width, height=height, **view)
 
 
 def camera_eye(cam: mujoco.MjvCamera) -> tuple[Array, Array]:

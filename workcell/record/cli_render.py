@@ -40,7 +40,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     render.add_argument("cell", metavar="CELL", help=CELL_HELP)
     render.add_argument("--out", metavar="FILE.png", required=True, help="the PNG to write")
     render.add_argument(
-        "--camera", metavar="NAME", help="a camera of the cell (default: an overview)"
+        "--camera",
+        metavar="NAME",
+        help="a camera of the cell, or a view: overview (the default), front, back, left, "
+        "right, top",
     )
     render.add_argument("--width", type=int, default=640, help="pixels (default 640)")
     render.add_argument("--height", type=int, default=480, help="pixels (default 480)")
@@ -77,7 +80,7 @@ def _concavity_option(parser: argparse.ArgumentParser) -> None:
 
 
 def _render(args: argparse.Namespace) -> int:
-    from workcell.cli import check_outputs
+    from workcell.cli_common import check_outputs
     from workcell.record.render import gl_backend, render_cell, save_png
 
     check_outputs(png=args.out)

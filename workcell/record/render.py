@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from workcell.errors import ModelError, RenderError
 from workcell.files import atomic_write_bytes
 from workcell.meshgeoms import COLLISION_GROUP, VISUAL_GROUP
-from workcell.record.camera import overview_camera
+from workcell.record.camera import named_view, overview_camera
 from workcell.record.gl import free_context, open_context
 
 if TYPE_CHECKING:
@@ -343,11 +343,10 @@ def _sample_frames(sim: Simulator, n: int = 64) -> list[int]:
 def _camera_for(
     sim: Simulator, camera: str | None, width: int, height: int
 ) -> str | mujoco.MjvCamera:
-    if camera is not None:
-        return camera
-    return overview_camera(
-        sim.model, _frames_qpos(sim, _sample_frames(sim)), width=width, height=height
-    )
+    """A cell camera or preset view (:func:`~workcell.record.camera.named_view`) fitted
+    over the whole run; None: the overview."""
+    frames = lambda: _frames_qpos(sim, _sample_frames(sim))  # noqa: E731
+    return named_view(sim.model, camera, frames, width=width, height=height)
 
 
 def _check_frame(sim: Simulator, frame: int) -> int:
@@ -367,8 +366,9 @@ def render_frame(
 ) -> NDArray[np.uint8]:
     """The cell at timeline ``frame`` (negative counts from the end) as (H, W, 3) uint8.
 
-    ``camera``: a camera of the cell by name, or None for :func:`overview_camera` over
-    the whole run (the same view for every frame of a run).
+    ``camera``: a camera of the cell by name, a preset view (``"top"``, ``"front"`` ...:
+    :data:`~workcell.record.camera.VIEWS`), or None for :func:`overview_camera`; views
+    are fitted over the whole run (the same view for every frame of a run).
     """
     i = _check_frame(sim, frame)
     cam = _camera_for(sim, camera, width, height)
@@ -401,7 +401,7 @@ def render_cell(
     model = compile_cell(cell, concavity=bound).model
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
-    cam = camera if camera is not None else overview_camera(model, width=width, height=height)
+    cam = named_view(model, camera, width=width, height=height)
     with CellRenderer(model, width, height, collision=collision) as r:
         return r.render(data, cam)
 

@@ -66,8 +66,9 @@ import rerun.blueprint as rrb
 from numpy.typing import ArrayLike, NDArray
 from tqdm import tqdm
 
+from workcell.cli_common import check_recording_path
 from workcell.errors import RecordError
-from workcell.files import atomic_path, check_writable
+from workcell.files import atomic_path
 from workcell.record.camera import camera_eye, overview_camera
 from workcell.record.rr_frames import Frames, log_events
 from workcell.record.rr_rates import Rates, acceleration_entity, speed_entity
@@ -202,8 +203,14 @@ def kept_frames(
     if fps is None or n == 0:
         return np.ones(n, dtype=bool)
     keep = np.zeros(n, dtype=bool)
-    samples = times[0] + np.arange(math.floor((times[-1] - times[0]) * fps + 1e-9) + 1) / fps
-    keep[np.minimum(np.searchsorted(times, samples - 1e-9, side="left"), n - 1)] = True
+    count = math.floor((times[-1] - times[0]) * fps + 1e-9) + 1  # samples
+    if count <= n:
+        samples = times[0] + np.arange(count) / fps
+        keep[np.minimum(np.searchsorted(times, samples - 1e-9, side="left"), n - 1)] = True
+    else:  # denser than the frames (fps 1e6: 10^10 samples): which frames they hit, O(n)
+        # frame i is kept when a sample lies in (times[i-1], times[i]] (shifted by 1e-9)
+        below = np.floor((times - times[0] + 1e-9) * fps)  # samples at or before each frame
+        keep[1:] = below[1:] > below[:-1]
     keep[[0, n - 1]] = True
     if must is not None and len(must):
         keep[must] = True
@@ -269,16 +276,6 @@ def _spawn_viewer(port: int) -> str:
     """Start a rerun viewer listening on ``port``; return its gRPC URL."""
     rr.spawn(port=port, connect=False)
     return f"rerun+http://127.0.0.1:{port}/proxy"
-
-
-def check_recording_path(path: str | os.PathLike[str]) -> Path:
-    """``path`` if a recording can be written there (an ``.rrd`` name in a writable folder,
-    see :func:`workcell.files.check_writable`), else RecordError; call it before the work."""
-    target = Path(path)
-    if target.suffix != ".rrd":
-        raise RecordError(f"a recording file must end in .rrd, got '{target}'")
-    check_writable(target, error=RecordError)
-    return target
 
 
 def record(

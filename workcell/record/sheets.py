@@ -23,6 +23,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from workcell import limits
 from workcell.errors import RenderError
 from workcell.files import atomic_path, check_writable
 from workcell.record.render import CellRenderer, _camera_for, _frames_qpos, save_png
@@ -95,6 +96,10 @@ def _font(size: int) -> Any:
 
 
 def _fit(draw: Any, text: str, font: Any, width: float) -> str:
+    """``text``'s first line, cut to ``width`` pixels with an ellipsis (a caption is one
+    line: an error's message may go on with the line it quotes and a caret)."""
+    lines = text.splitlines()
+    text = lines[0] if lines else ""
     if draw.textlength(text, font=font) <= width:
         return text
     while text and draw.textlength(text + "…", font=font) > width:
@@ -130,11 +135,11 @@ def contact_sheet(
     rows = math.ceil(n / cols)
     fsize = max(9, tile_height // 18)
     cap_h, gap = 2 * fsize + 10, 4
-    sheet = PILImage.new(
-        "RGB",
-        (cols * tile_width + (cols + 1) * gap, rows * (tile_height + cap_h) + (rows + 1) * gap),
-        "white",
-    )
+    size = (cols * tile_width + (cols + 1) * gap, rows * (tile_height + cap_h) + (rows + 1) * gap)
+    what = f"a contact sheet of {n:,} tiles of {tile_width} x {tile_height}"
+    limits.check("max_images", n, what)  # before anything is rendered
+    limits.check("max_pixels", size[0] * size[1], what)
+    sheet = PILImage.new("RGB", size, "white")
     draw, font = ImageDraw.Draw(sheet), _font(fsize)
     cam = _camera_for(sim, camera, tile_width, tile_height)
     data = mujoco.MjData(sim.model)
@@ -163,6 +168,7 @@ def video_frames(sim: Simulator, fps: float) -> NDArray[np.intp]:
     times = sim.timeline.sim_times()
     T = float(times[-1] - times[0])
     n = math.ceil(T * fps - 1e-9) + 1
+    limits.check("max_images", n, f"{n:,} pictures: {T:.4g} s at {fps:g} per second")
     ts = np.minimum(times[0] + np.arange(n) / fps, times[-1])
     return np.maximum(np.searchsorted(times, ts + 1e-9, side="right") - 1, 0)
 

@@ -6,6 +6,15 @@ chain (the robot's ``base`` transform left out), must be parallel, perpendicular
 meet as the family requires. Each family then reads its parameters off these lines and
 trusts them only after :func:`verify_fk` has compared its own forward kinematics with the
 robot's at random joint values. Lengths in m, angles in rad.
+
+Published robot files round their numbers (the ROS Puma 560 URDF writes pi/2 as
+1.570796325: its axes are 1.8e-9 rad off perpendicular). The tests therefore accept axes
+within :data:`ANGLE_TOL` of parallel or perpendicular and lines within
+:data:`OFFSET_TOL` of meeting; the family's model is then the nearest exact geometry.
+When that model's FK matches the robot's within :data:`VERIFY_TOL` it is exact; when it
+matches only within :func:`rounding_bound` it is marked ``exact=False`` and every
+closed-form solution is refined on the robot's own chain
+(:mod:`workcell.robots.ik_refine`) before it is returned.
 """
 
 from __future__ import annotations
@@ -24,20 +33,29 @@ from workcell.robots.robot import Robot
 from workcell.spatial import invert
 
 __all__ = [
+    "ANGLE_TOL",
     "GEOMETRY_TOL",
+    "OFFSET_TOL",
     "VERIFY_TOL",
     "AxisModel",
     "axis_lines",
     "base_frame",
     "fitted",
     "line_gap",
+    "max_reach",
+    "rounding_bound",
     "straight_value",
     "verify_fk",
 ]
 
 Array = NDArray[np.float64]
 GEOMETRY_TOL = 1e-9
-"""m, and cosines: axes closer than this to parallel, perpendicular or meeting are so."""
+"""m, and cosines: below this, lines are parallel for :func:`line_gap` and axis 1 is the
+frame-0 z axis for :func:`base_frame`."""
+ANGLE_TOL = 1e-6
+"""rad: axes closer than this to parallel or perpendicular are taken as such (rounded files)."""
+OFFSET_TOL = 1e-7
+"""m: axes closer than this to meeting meet; family lengths closer than this to 0 are 0."""
 VERIFY_TOL = 1e-9
 """m and rotation-matrix entries: a family's FK must match the robot's this closely."""
 VERIFY_SAMPLES = 64  # random joint vectors compared (plus q = 0)
@@ -48,12 +66,23 @@ class AxisModel:
     """What every family model has: joint ``offsets`` (rad) and ``signs`` mapping joint
     values to the model's angles, ``q_i = sign_i (theta_i + offset_i)``; ``base`` (4x4)
     the model's base frame in frame 0 of the chain; ``end`` (4x4) the robot's tool frame
-    in the model's end frame."""
+    in the model's end frame; ``deviation``: how far the model's FK is from the robot's
+    (m and rotation entries, the largest over :func:`verify_fk`'s samples); ``exact``
+    when that is within ``VERIFY_TOL`` (else the solutions need refining on the robot)."""
 
     offsets: tuple[float, ...]
     signs: tuple[int, ...]
     base: Array
     end: Array
+    deviation: float = dataclasses.field(default=0.0, kw_only=True)
+    slack: float = dataclasses.field(default=0.0, kw_only=True)
+    """m: added to the solvers' reach tests; for a rounded chain's model 10x its
+    deviation (the real chain's reach boundary lies within it; its refinement decides)."""
+
+    @property
+    def exact(self) -> bool:
+        """True when the model's FK is the robot's to within ``VERIFY_TOL``."""
+        return self.deviation <= VERIFY_TOL
 
     def theta(self, Q: Array) -> Array:
         """The model's angles (..., 6) of joint values Q (rad): ``sign * q - offset``."""
@@ -63,20 +92,43 @@ class AxisModel:
 M = TypeVar("M", bound=AxisModel)
 
 
+def max_reach(robot: Robot) -> float:
+    """Upper bound (m) on the distance from the origin of frame 0 (``robot.base``) to the tool point.
+
+    Sum over the joints of the largest translation each joint's transform can make
+    (:meth:`~workcell.robots.chain.Joint.max_translation`: ``sqrt(a^2 + d^2)`` for a DH
+    row, with d over its limits for a prismatic joint) plus the tool offset. Any target
+    farther than this is out of reach whatever the joint limits.
+    """
+    r = sum(j.max_translation() for j in robot.joints)
+    return r + float(np.linalg.norm(robot.tool[:3, 3]))
+
+
+def rounding_bound(robot: Robot) -> float:
+    """How far (m and rotation entries) a family model may be from the robot's FK and
+    still count as the same geometry rounded: every joint's axis tilted by ``ANGLE_TOL``
+    over the robot's reach bound (:func:`max_reach`), plus ``OFFSET_TOL`` per joint."""
+    return robot.dof * (ANGLE_TOL * max(max_reach(robot), 1.0) + OFFSET_TOL)
+
+
 def fitted(robot: Robot, draft: M, fk: Callable[[M, Array], Array], where: str) -> M:
     """``draft`` (its ``end`` the identity) with the ``end`` that puts its end frame on
-    the robot's tool frame at q = 0, trusted only when its FK then matches the robot's
-    (:func:`verify_fk` within ``VERIFY_TOL``); KinematicsError saying by how much not."""
+    the robot's tool frame at q = 0, trusted when its FK then matches the robot's
+    (:func:`verify_fk`): within ``VERIFY_TOL`` exactly, within :func:`rounding_bound`
+    as the nearest exact geometry of a rounded chain (``deviation`` records which);
+    KinematicsError saying by how much not."""
     zero = fk(draft, np.zeros((1, robot.dof)))[0]
     end = invert(zero) @ np.linalg.inv(robot.base) @ robot.fk(np.zeros(robot.dof))
     model = dataclasses.replace(draft, end=end)
     err = verify_fk(robot, lambda Q: fk(model, Q))
-    if err > VERIFY_TOL:
+    bound = rounding_bound(robot)
+    if err > bound:
         raise KinematicsError(
             f"{where}: the model read from its axes misses its FK by {err:.3g} (m or rotation "
-            "entries) at random joint values"
+            f"entries) at random joint values (a rounded file may miss by {bound:.2g})"
         )
-    return model
+    slack = 0.0 if err <= VERIFY_TOL else 10.0 * err
+    return dataclasses.replace(model, deviation=err, slack=slack)
 
 
 def axis_lines(robot: Robot, q: Array | None = None) -> tuple[Array, Array]:

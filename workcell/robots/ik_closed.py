@@ -33,6 +33,15 @@ wrist (|sin theta5| < 1e-6), the shoulder (the wrist point within 1e-6 (relative
 the boundary between the l and r branches; on axis 1 itself q1 is taken from
 ``q_current``) and the elbow (the arm stretched or folded to within 1e-6 rad). At an aligned wrist (|sin theta5| < 1e-12) q4 is the current q4 (or 0)
 and q6 is solved so the pose stays exact.
+
+Robot files round their numbers (the ROS Puma 560 URDF's axes are 1.8e-9 rad off
+perpendicular). A chain within 1e-6 rad and 1e-7 m of a family (:mod:`workcell.robots.axes`)
+is solved on the nearest exact geometry; every solution is then refined on the robot's
+own chain to 1e-10 m and rad (:mod:`workcell.robots.ik_refine`: its ``position_error``
+and ``orientation_error`` are the residuals, its ``method`` ``"closed-form, refined"``),
+and one that does not refine is left out, never returned wrong. Such a family is
+trusted only when, at random joint vectors away from singularities, the refined
+solutions contain the generating q.
 """
 
 from __future__ import annotations
@@ -70,6 +79,10 @@ CONFIGS: tuple[str, ...] = ("lun", "luf", "ldn", "ldf", "run", "ruf", "rdn", "rd
 EXACT_TOL = 1e-9  # m and rad: a solution is exact when FK(q) is this close to T
 _ORTHO_TOL = 1e-13  # |R^T R - I| of base and tool below which errors are measured in floats
 _CF = "closed-form"
+_CF_REFINED = "closed-form, refined"  # the method of a rounded chain's solutions
+_FOUND_TOL = 1e-5  # rad: a refined solution is the generating q (modulo 2 pi)
+_CONDITIONED = 1e-3  # smallest singular value of the Jacobian of a well-conditioned q
+_SINGULAR_TOL = 1e-6  # |sin theta5| of a singular wrist (both families flag it so)
 _INV_TWO_PI = 1.0 / (2.0 * math.pi)
 _NO_NEAR: tuple[float | None, ...] = (None,) * 6
 _chain = chain.from_iterable
@@ -94,6 +107,7 @@ class _Solver:
     floats: bool  # base and tool rotations orthonormal to rounding: errors in floats
     joints: tuple[tuple[float, float, float, float], ...]  # lo, hi, lo_t, hi_t per joint
     ref0: tuple[float, ...]  # the family angles of q = 0 (rad): the free angles by default
+    refine: bool = False  # a rounded chain: solutions are Newton-refined on the robot's own
 
 
 _CACHE: weakref.WeakKeyDictionary[Robot, _Solver | str] = weakref.WeakKeyDictionary()
@@ -120,7 +134,7 @@ def _detect(robot: Robot) -> _Solver | str:
         post = None if np.array_equal(model.end, np.eye(4)) else invert(model.end)
         Rs = np.stack([robot.base[:3, :3], robot.tool[:3, :3]])
         deviation = float(np.abs(Rs.transpose(0, 2, 1) @ Rs - np.eye(3)).max())
-        return _Solver(
+        S = _Solver(
             family=name,
             model=model,
             solve_one=mod.solve_one,
@@ -132,7 +146,7 @@ def _detect(robot: Robot) -> _Solver | str:
             pre=pre,
             post=post,
             t_end=tuple(float(v) for v in model.end[:3, 3]),
-            floats=deviation <= _ORTHO_TOL,
+            floats=deviation <= _ORTHO_TOL and model.exact,
             ref0=tuple(
                 float(s) * 0.0 - float(o) for s, o in zip(model.signs, model.offsets, strict=True)
             ),
@@ -145,8 +159,42 @@ def _detect(robot: Robot) -> _Solver | str:
                     strict=True,
                 )
             ),
+            refine=not model.exact,
         )
+        if S.refine:
+            why = _verify_refined(robot, S)
+            if why:
+                reasons.append(f"{name}: robot '{robot.name}' {why}")
+                continue
+        return S
     return "; ".join(reasons)
+
+
+def _verify_refined(robot: Robot, S: _Solver) -> str:
+    """ "" when the refined closed form of a rounded chain (``S.refine``) finds, at q = 0
+    and at :func:`~workcell.robots.axes.verify_fk`'s random joint vectors, the generating
+    q among its solutions (every solution it returns is exact by construction); else why
+    not. Joint vectors near a singularity (the Jacobian's smallest singular value below
+    ``_CONDITIONED``) are left out: there the rounding itself moves the solutions (a
+    fold's two branches split by ~sqrt of the rounding) and the check would test it."""
+    from workcell.robots.axes import VERIFY_SAMPLES
+    from workcell.robots.ik_refine import pose_jacobians
+
+    rng = np.random.default_rng(7)
+    Q = np.vstack([np.zeros(6), rng.uniform(robot._lo, robot._hi, (VERIFY_SAMPLES, 6))])
+    T, J = pose_jacobians(robot, Q)
+    keep = np.linalg.svd(J, compute_uv=False)[:, -1] > _CONDITIONED
+    Q = Q[keep]
+    S_all, _ = _batch(robot, S, T[keep], Q)
+    found = np.abs(wrap_pi(S_all - Q[:, None, :])).max(axis=-1)
+    missed = ~(np.nan_to_num(found, nan=np.inf).min(axis=1) < _FOUND_TOL)
+    if missed.any() or len(Q) < VERIFY_SAMPLES // 2:
+        return (
+            f"is within the rounding of the {S.family} family but its refined closed form "
+            f"misses the generating joint values at {int(missed.sum())} of {len(Q)} test "
+            "poses"
+        )
+    return ""
 
 
 def _solver(robot: Robot) -> _Solver:
@@ -249,6 +297,15 @@ def ik_report(
     sols, maybe_dup, reason = S.solve_one(S.model, rows, ref_t)
     if not sols:
         return [], reason
+    if S.refine:  # a rounded chain: Newton on the robot's own chain, failures dropped
+        found = len(sols)
+        sols = _refined(robot, S, sols, M)
+        maybe_dup = True
+        if not sols:
+            return [], (
+                f"none of the {found} closed-form solutions of the nearest exact geometry "
+                f"refines onto robot '{robot.name}' (its rounding matters at this pose)"
+            )
     Qs, qs, flags = rows_of(S.signs, S.offs, S.joints, sols, near)
     if maybe_dup:
         keep = distinct(np.array(Qs)).tolist()
@@ -276,23 +333,39 @@ def ik_report(
     out = []  # within limits first, each group in slot order (or nearest first)
     outside = []
     new = _new_solution
+    cf = _CF_REFINED if S.refine else _CF
     for (slot, _, singular), (dp, dr), bad, q in parts:
         if bad is not None:
             why = limits_reason(bad)
-            sol = (q, False, CONFIGS[slot], False, singular, dp, dr, 0, why, _CF)
+            sol = (q, False, CONFIGS[slot], False, singular, dp, dr, 0, why, cf)
             outside.append(new(IKSolution, sol))
             continue
         why = ""
         if dp > EXACT_TOL or dr > EXACT_TOL:
             why = f"pose not reached exactly: errors {dp:.1e} m, {dr:.1e} rad"
-        out.append(
-            new(IKSolution, (q, not why, CONFIGS[slot], True, singular, dp, dr, 0, why, _CF))
-        )
+        out.append(new(IKSolution, (q, not why, CONFIGS[slot], True, singular, dp, dr, 0, why, cf)))
     in_limits = len(out)
     out += outside
     if not in_limits:
         reason = f"no solution within the joint limits ({m} found outside them)"
     return out, reason
+
+
+def _refined(robot: Robot, S: _Solver, sols: list[Any], M: Array) -> list[Any]:
+    """The solutions (slot, family angles, singular) refined onto pose M on the robot's
+    chain (:func:`workcell.robots.ik_refine.refine`); those that do not refine are left out."""
+    from workcell.robots.ik_refine import refine
+
+    signs, offs = np.array(S.signs), np.array(S.offs)
+    theta = np.array([t for _, t, _ in sols])
+    singular = np.array([sing for _, _, sing in sols], dtype=bool)
+    Q, _, _, ok = refine(robot, signs * (theta + offs), M, singular)
+    theta = signs * Q - offs
+    return [
+        (slot, tuple(theta[i].tolist()), singular)
+        for i, (slot, _, singular) in enumerate(sols)
+        if ok[i]
+    ]
 
 
 def ik_all(robot: Robot, T: ArrayLike, q_current: ArrayLike | None = None) -> list[IKSolution]:
@@ -329,7 +402,8 @@ def ik_batch(
     representative (nearest to ``q_current``, else to the (-pi, pi] value), or the
     (-pi, pi] value when some joint has none. ``valid`` marks the in-limit solutions. The
     non-NaN slots are the solutions of :func:`ik_all` (same q, same config); there is no
-    FK check and no singular flag here. GeometryError for poses that are not rigid.
+    FK check and no singular flag here (a rounded chain's slots are refined, and NaN
+    where that fails). GeometryError for poses that are not rigid.
     """
     S = _solver(robot)
     T = spatial.as_transforms(Ts, rigid=True, what=f"robot '{robot.name}' target poses")
@@ -358,6 +432,16 @@ def _batch(
     signs, offs = np.array(S.signs), np.array(S.offs)
     ref_t = (np.zeros((len(T), 6)) if ref is None else ref) * signs - offs
     theta, exists, degenerate = S.solve_batch(S.model, M, ref_t)
+    if S.refine:  # a rounded chain: Newton on the robot's own chain, failures dropped
+        from workcell.robots.ik_refine import refine
+
+        n_i, k_i = np.nonzero(exists)
+        th = theta[n_i, k_i]
+        singular = np.abs(np.sin(th[:, 4])) < _SINGULAR_TOL
+        Qr, _, _, ok = refine(robot, signs * (th + offs), T[n_i], singular)
+        theta[n_i, k_i] = signs * Qr - offs
+        exists[n_i[~ok], k_i[~ok]] = False
+        degenerate = np.ones_like(degenerate)
     Q = wrap_pi(signs * (theta + offs))
     rows = np.flatnonzero(degenerate & exists.any(axis=1))
     if len(rows):  # a slot equal (modulo 2 pi) to an earlier existing slot is dropped

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell.errors import KinematicsError
+from workcell.robots.axes import max_reach
 from workcell.robots.ik_closed import config_of, family_of, ik_all, wrist_sine
 from workcell.robots.robot import IKSolution, Robot
 from workcell.spatial import angle_between
@@ -41,18 +42,6 @@ def _pose_errors(T: Array, T_target: Array) -> tuple[float, float]:
         float(np.linalg.norm(T[:3, 3] - T_target[:3, 3])),
         angle_between(T[:3, :3], T_target[:3, :3]),
     )
-
-
-def max_reach(robot: Robot) -> float:
-    """Upper bound (m) on the distance from the origin of frame 0 (``robot.base``) to the tool point.
-
-    Sum over the joints of the largest translation each joint's transform can make
-    (:meth:`~workcell.robots.chain.Joint.max_translation`: ``sqrt(a^2 + d^2)`` for a DH
-    row, with d over its limits for a prismatic joint) plus the tool offset. Any target
-    farther than this is out of reach whatever the joint limits.
-    """
-    r = sum(j.max_translation() for j in robot.joints)
-    return r + float(np.linalg.norm(robot.tool[:3, 3]))
 
 
 def _reach_gap(robot: Robot, T_target: Array) -> float:

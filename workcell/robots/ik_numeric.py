@@ -14,9 +14,10 @@ Two methods:
   one ``FrameTask`` on the ``"tool"`` site (position and orientation cost 1,
   ``lm_damping``), the daqp QP backend, a prebuilt ``ConfigurationLimit`` (exact limits),
   tiny global damping; a redundant arm (more than 6 joints) adds a posture task towards
-  ``q0`` (cost 1e-2) until the pose is within 1e-3 m and rad, then converges without it:
-  of the self-motion's solutions it prefers the one nearest ``q0`` (mink's notes: a
-  posture cost above 1e-4 would cost precision if kept to the end).
+  ``q0`` (cost 1e-2) until the pose is within 1e-3 m and rad, or until the attempt
+  stalls with it, then converges without it: of the self-motion's solutions it prefers
+  the one nearest ``q0`` (mink's notes: a posture cost above 1e-4 would cost precision
+  if kept to the end).
   Attempts, in order: ``q0``; for OPW and UR robots the closed-form solutions nearest to
   ``q0`` (``workcell.robots.ik_closed.ik_all``), filtered by
   ``config``; then seeded random in-limit configurations. An attempt ends when converged,

@@ -35,6 +35,7 @@ import numpy as np
 import trimesh
 
 from workcell import limits
+from workcell.checks import check_size
 from workcell.errors import ModelError
 from workcell.files import read_bytes
 
@@ -42,6 +43,7 @@ __all__ = [
     "DEFAULT_SLIDE_SPEED",
     "DEFAULT_SPEED",
     "MESH_TYPES",
+    "count_facets",
     "joint_speeds",
     "load_mesh",
     "parse_xml",
@@ -98,6 +100,43 @@ def parse_xml(data: bytes, what: str) -> tuple[ET.Element, dict[ET.Element, int]
     return builder.close(), lines
 
 
+_OBJ_FACE = re.compile(rb"(?m)^[ \t]*f[ \t][^\n]*")
+_PLY_FACES = re.compile(rb"(?m)^element[ \t]+face[ \t]+(\d{1,15})")
+_DAE_COUNT = re.compile(
+    rb"<(?:triangles|polylist|polygons|tristrips|trifans)\b[^>]*?\bcount=\"(\d{1,15})\""
+)
+
+
+def count_facets(data: bytes, suffix: str) -> int:
+    """The triangles a mesh file's bytes hold, counted without parsing it (to refuse a
+    file over ``max_facets`` before a reader spends seconds and gigabytes on it).
+
+    Binary STL: the header's count (when the size agrees); ASCII STL: its ``endfacet``
+    lines; OBJ: each face line's vertices less 2; PLY: the header's face count; COLLADA:
+    the ``count`` of its triangle and polygon lists; MuJoCo's MSH: its header's face
+    count. 0 for other types (their readers bound themselves)."""
+    ext = suffix.lower().lstrip(".")
+    if ext == "stl":
+        if len(data) >= 84:
+            n = int.from_bytes(data[80:84], "little")
+            if len(data) == 84 + 50 * n:
+                return n
+        return data.count(b"endfacet") + data.count(b"ENDFACET")
+    if ext == "obj":
+        lines = data.count(b"\nf ") + data.count(b"\nf\t") + int(data.startswith(b"f"))
+        if lines > limits.current().max_facets:
+            return lines  # each face line is at least one triangle: over already
+        return sum(max(len(m.group().split()) - 3, 1) for m in _OBJ_FACE.finditer(data))
+    if ext == "ply":
+        m = _PLY_FACES.search(data[:65536])
+        return int(m.group(1)) if m else 0
+    if ext == "dae":
+        return sum(int(m.group(1)) for m in _DAE_COUNT.finditer(data))
+    if ext == "msh" and len(data) >= 16:
+        return int.from_bytes(data[12:16], "little", signed=True)
+    return 0
+
+
 def _colour(visual: Any) -> Colour | None:
     """The main RGBA colour (0..1) of a trimesh visual, None when it has none."""
     try:
@@ -143,6 +182,7 @@ def load_mesh(
     data = read_bytes(path, what="mesh file", error=ModelError)
     if ext == "dae":
         _check_dae(data, f"mesh file '{path}'")
+    limits.check("max_facets", count_facets(data, ext), f"mesh file '{path}' (before reading it)")
     try:
         loaded = trimesh.load(io.BytesIO(data), file_type=ext)
     except Exception as exc:  # every reader's own failure means a bad file here
@@ -177,7 +217,8 @@ def primitive(kind: str, *, size: tuple[float, ...] = (), what: str = "shape") -
     """A closed mesh centred on the origin (m): ``box`` (size = full x, y, z extents),
     ``cylinder`` (radius, full length along z), ``sphere`` (radius), ``capsule`` (radius,
     distance between the caps' centres, along z), ``ellipsoid`` (three radii).
-    ModelError naming ``what`` for sizes that are not positive."""
+    ModelError naming ``what`` for sizes that are not positive, DegenerateError (also a
+    ModelError) for sizes under :data:`~workcell.checks.MIN_LENGTH`."""
     s = tuple(float(v) for v in size)
     need = {"box": 3, "cylinder": 2, "sphere": 1, "capsule": 2, "ellipsoid": 3}
     if kind not in need:
@@ -187,6 +228,9 @@ def primitive(kind: str, *, size: tuple[float, ...] = (), what: str = "shape") -
         ok = True  # a capsule of length 0 is a sphere
     if not ok:
         raise ModelError(f"{what}: a {kind} needs {need[kind]} positive size(s), got {list(s)}")
+    for k, v in enumerate(s):
+        if not (kind == "capsule" and k == 1 and v == 0):
+            check_size(f"{what}: a {kind}", f"size {k + 1}", v)
     limits.check("max_coordinate", max(s), what)
     if kind == "box":
         return trimesh.creation.box(extents=s)

@@ -25,10 +25,10 @@ and the robot is read off the compiled model (:mod:`workcell.robots.tree` builds
   out, so :func:`~workcell.robots.parallel_gripper` can be attached); actuators,
   tendons and equalities are not read.
 
-The file is read within ``max_file_bytes`` (each mesh file too) and its meshes within
-``max_facets``. With ``root`` (a server's folder), every file the model names
-(includes, mesh and texture files and their folders) must lie inside it: the XML is
-checked before MuJoCo reads anything. Units: metres, radians, seconds.
+The file and every file it names are read by us, found as MuJoCo finds them, and given
+to MuJoCo in memory (:mod:`workcell.robots.mjcf_files`): regular files only, together
+within ``max_file_bytes``, meshes within ``max_facets``; with ``root`` (a server's
+folder), every one of them must lie inside it. Units: metres, radians, seconds.
 """
 
 from __future__ import annotations
@@ -42,9 +42,9 @@ import trimesh
 
 from workcell import limits
 from workcell.errors import ModelError, WorkcellError
-from workcell.files import leaves_root, read_bytes
 from workcell.robots.chain import Joint
-from workcell.robots.meshfile import joint_speeds, parse_xml, primitive, sha256
+from workcell.robots.meshfile import joint_speeds, primitive, sha256
+from workcell.robots.mjcf_files import read_mjcf, spec_from_files
 from workcell.robots.robot import Robot, RobotFile
 from workcell.robots.tree import Shape, TreeLink, build_robot
 from workcell.robots.urdf import CONTINUOUS_LIMIT
@@ -58,65 +58,24 @@ _HINGE, _SLIDE, _BALL = (
     int(mujoco.mjtJoint.mjJNT_SLIDE),
     int(mujoco.mjtJoint.mjJNT_BALL),
 )
-_FILE_ATTRS = frozenset(
-    {"file", "meshdir", "texturedir", "assetdir"}
-    | {f"file{s}" for s in ("right", "left", "up", "down", "front", "back")}
-)
 _DEFAULT_RGBA = (0.5, 0.5, 0.5, 1.0)
 
 
-def _confine(path: Path, root: Path, seen: set[Path]) -> None:
-    """ModelError unless every file ``path`` names (recursively through includes) lies
-    inside ``root`` (module doc)."""
-    what = f"MJCF file '{path}'"
-    top, lines = parse_xml(read_bytes(path, what="MJCF file", error=ModelError), what)
-    here = path.parent
-    for el in top.iter():
-        for attr, value in el.attrib.items():
-            if attr not in _FILE_ATTRS:
-                continue
-            parts = Path(value).parts
-            full = os.path.realpath(here / value)
-            if os.path.isabs(value) or value.startswith("~") or ".." in parts:
-                why = "leads outside the root folder"
-            else:
-                why = leaves_root(full, root)
-            if why is not None:
-                raise ModelError(
-                    f"{what}: line {lines.get(el, '?')}: <{el.tag} {attr}={value!r}> refused: "
-                    f"{why.removeprefix('it ')}; files must lie beside the model, inside the root"
-                )
-            if el.tag == "include" and attr == "file" and Path(full) not in seen:
-                seen.add(Path(full))
-                _confine(Path(full), root, seen)
-
-
 def _spec(path: Path, root: Path | None) -> tuple[mujoco.MjModel, bytes]:
-    """MuJoCo's compile of the file (and the file's bytes), within the work limits."""
+    """MuJoCo's compile of the file (and the file's bytes), within the work limits; every
+    file it names read by us, confined to ``root`` (:mod:`workcell.robots.mjcf_files`)."""
     what = f"MJCF file '{path}'"
-    data = read_bytes(path, what="MJCF file", error=ModelError)
-    parse_xml(data, what)  # well-formed, without entities
-    if root is not None:
-        _confine(path, root, {path})
-    try:
-        spec = mujoco.MjSpec.from_file(str(path))
-    except ValueError as exc:
-        raise ModelError(f"{what}: MuJoCo cannot read it: {exc}") from None
-    base = Path(spec.modelfiledir or path.parent)
-    for mesh in spec.meshes:
-        if mesh.file:
-            f = base / spec.compiler.meshdir / mesh.file
-            if f.is_file():
-                limits.check("max_file_bytes", f.stat().st_size, f"mesh file '{f}'")
+    files = read_mjcf(path, root)
+    spec = spec_from_files(files, what)
     try:
         model = spec.compile()
     except ValueError as exc:
-        raise ModelError(f"{what}: MuJoCo cannot compile it: {exc}") from None
+        raise ModelError(f"{what}: MuJoCo cannot compile it: {files.explain(str(exc))}") from None
     for i in range(model.nmesh):
         limits.check("max_facets", int(model.mesh_facenum[i]), f"{what}: mesh {i}")
     sizes = [np.abs(a).max(initial=0.0) for a in (model.body_pos, model.geom_size, model.site_pos)]
     limits.check("max_coordinate", float(max(sizes)), f"{what}: a body, geom or site")
-    return model, data
+    return model, files.data
 
 
 def _geom_mesh(m: mujoco.MjModel, g: int) -> trimesh.Trimesh | None:

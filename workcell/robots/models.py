@@ -261,7 +261,7 @@ def fanuc_lrmate200id() -> Robot:
     flange 0.080; J3, J4, J5, J6 turn about -y, -x, -y, -x; limits +-170, -100..145,
     -140..280, +-190, +-125, +-360 deg; speeds 450, 380, 520, 550, 545, 1000 deg/s);
     reach 717 mm. Joint 3 is the URDF's (relative to the upper arm); FANUC's controller
-    reports J3 from the horizontal (J3_fanuc = J3 + J2)."""
+    reports J3 from the horizontal (J3_fanuc = J3 - J2, the ROS-I driver's J23_factor 1)."""
     rows: list[Row] = [
         ("j1", (0, 0, 0.330), (0, 0, 1), (-169.88, 169.88), 450),
         ("j2", (0.050, 0, 0), (0, 1, 0), (-100, 145), 380),

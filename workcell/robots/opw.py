@@ -29,7 +29,10 @@ c2, c3 > 0 fix the zeros of theta2 and t23; axis 5's own direction is OPW's y th
 theta5 = 0 is the aligned wrist that lies nearest the middle of joint 5's limits (the
 straight wrist, not the folded one); theta6's offset is 0 (``end`` takes the rest).
 The parameters are trusted only when the model's FK matches the robot's at random q
-(:func:`~workcell.robots.axes.verify_fk`, 1e-9).
+(:func:`~workcell.robots.axes.verify_fk`, 1e-9); the axis tests accept the rounding of
+published files (axes within 1e-6 rad, lines within 1e-7 m: see
+:mod:`workcell.robots.axes`), and a model that then matches only to within that rounding
+has its solutions refined on the robot's chain.
 
 Configuration letters, as for the Puma (see :mod:`workcell.robots.ik_closed`): ``r``
 when the wrist centre lies ahead of axis 1 (along e(theta1)), ``u`` when the elbow
@@ -49,7 +52,8 @@ from numpy.typing import NDArray
 
 from workcell.errors import KinematicsError
 from workcell.robots.axes import (
-    GEOMETRY_TOL,
+    ANGLE_TOL,
+    OFFSET_TOL,
     AxisModel,
     axis_lines,
     base_frame,
@@ -147,18 +151,19 @@ def opw_model(robot: Robot) -> OPWModel:
     if robot.dof != 6 or any(j.kind != "revolute" for j in robot.joints):
         raise KinematicsError(f"{where}: it needs 6 revolute joints")
     P, U = axis_lines(robot)
-    tol = GEOMETRY_TOL
+    tol = OFFSET_TOL  # lengths (m); angles are tested against ANGLE_TOL (rad)
     checks = [
         ("axes 1 and 2 are not perpendicular", abs(U[0] @ U[1])),
         ("axes 2 and 3 are not parallel", np.linalg.norm(np.cross(U[1], U[2]))),
         ("axes 3 and 4 are not perpendicular", abs(U[2] @ U[3])),
         ("axes 4 and 5 are not perpendicular", abs(U[3] @ U[4])),
         ("axes 5 and 6 are not perpendicular", abs(U[4] @ U[5])),
-    ]
-    bad = [f"{what} ({v:.3g})" for what, v in checks if v > tol]
+    ]  # sines of the angles off perpendicular or parallel
+    bad = [f"{what} ({math.asin(min(v, 1.0)):.3g} rad off)" for what, v in checks if v > ANGLE_TOL]
     gap45, c, _ = line_gap(P[3], U[3], P[4], U[4])
     gap56, _, c6 = line_gap(P[4], U[4], P[5], U[5])
-    gap46 = line_gap(P[3], U[3], P[5], U[5])[0] if abs(U[3] @ U[5]) < 1 - tol else 0.0
+    skew46 = np.linalg.norm(np.cross(U[3], U[5])) > ANGLE_TOL
+    gap46 = line_gap(P[3], U[3], P[5], U[5])[0] if skew46 else 0.0
     for what, g in (("4 and 5", gap45), ("5 and 6", gap56), ("4 and 6", gap46)):
         if g > tol:
             bad.append(f"axes {what} miss each other by {g * 1e3:.4g} mm (no spherical wrist)")

@@ -31,6 +31,7 @@ __all__ = [
     "ALIGNED_TOL",
     "REACH_TOL",
     "SINGULAR_TOL",
+    "arm_plane",
     "beside_axis1",
     "letters",
     "pose_errors",
@@ -63,15 +64,16 @@ def _unreachable(m: OPWModel, rho: float, far: bool) -> str:
 
 
 def beside_axis1(
-    px: float, py: float, offset: float, point: str, name: str
+    px: float, py: float, offset: float, point: str, name: str, slack: float = 0.0
 ) -> tuple[float, float, str]:
     """A wrist point (px, py, m) against the cylinder of radius |offset| (m) about axis 1
     that the arm cannot enter: (squared distance from axis 1, the point's distance along
     a tangent of the cylinder, sqrt(r2 - offset^2) (0 on it), "" or why it is out of reach).
-    ``point`` and ``name`` word the reason (the point's and the offset's names)."""
+    ``point`` and ``name`` word the reason (the point's and the offset's names); a point
+    within ``REACH_TOL + slack`` (m) inside counts as on the cylinder."""
     r2 = px * px + py * py
     h2 = r2 - offset * offset
-    if h2 < -2.0 * abs(offset) * REACH_TOL:
+    if h2 < -2.0 * abs(offset) * (REACH_TOL + slack):
         return (
             r2,
             0.0,
@@ -95,7 +97,8 @@ def solve_one(
     a1, b, c1, c2 = m.a1, m.b, m.c1, m.c2
     (L, gamma), s5 = m.forearm, m.signs[4]
     cos, sin, atan2, sqrt = math.cos, math.sin, math.atan2, math.sqrt
-    r2, xs, why = beside_axis1(px, py, b, "wrist centre", "b")
+    tol = REACH_TOL + m.slack
+    r2, xs, why = beside_axis1(px, py, b, "wrist centre", "b", m.slack)
     if why:
         return [], False, why
     shoulder_free = r2 < REACH_TOL * REACH_TOL
@@ -117,7 +120,7 @@ def solve_one(
         ck = (rho2 - cc) / twice
         if ck > 1.0 or ck < -1.0:
             rho = sqrt(rho2)
-            if rho > c2 + L + REACH_TOL or rho < abs(c2 - L) - REACH_TOL:
+            if rho > c2 + L + tol or rho < abs(c2 - L) - tol:
                 reasons.append(_unreachable(m, rho, rho > c2 + L))
                 continue
             ck = 1.0 if ck > 1.0 else -1.0  # on the boundary, up to rounding
@@ -162,19 +165,25 @@ def solve_one(
     return out, maybe_dup, ""
 
 
-def letters(m: OPWModel, theta: Array) -> str:
-    """Configuration letters of the OPW angles theta (6,) rad (module doc of opw)."""
-    _t1, t2, t3, _, t5, _ = (float(t) for t in theta)
-    (L, gamma), s5 = m.forearm, m.signs[4]
+def arm_plane(m: OPWModel, theta: Array) -> tuple[float, float]:
+    """(u, cross): the wrist centre's distance ahead of the shoulder in the arm's plane
+    (m), and (wrist x elbow) there (m^2): the elbow lies on the arm's upper side (the
+    side it has in front of the robot with the elbow up) when cross >= 0."""
+    t2, t3 = float(theta[1]), float(theta[2])
+    L, gamma = m.forearm
     t23 = t2 + t3
     ex, ez = m.c2 * math.sin(t2), m.c2 * math.cos(t2)  # elbow from the shoulder
     u = ex + L * math.sin(t23 + gamma)
     v = ez + L * math.cos(t23 + gamma)
-    x = u + m.a1
-    cross = u * ez - v * ex
-    right = x >= 0.0
+    return u, u * ez - v * ex
+
+
+def letters(m: OPWModel, theta: Array) -> str:
+    """Configuration letters of the OPW angles theta (6,) rad (module doc of opw)."""
+    u, cross = arm_plane(m, theta)
+    right = u + m.a1 >= 0.0
     up = cross >= 0.0 if u >= 0.0 else cross <= 0.0
-    flip = s5 * math.sin(t5) > 0.0
+    flip = m.signs[4] * math.sin(float(theta[4])) > 0.0
     return ("r" if right else "l") + ("u" if up else "d") + ("f" if flip else "n")
 
 
@@ -271,7 +280,8 @@ def solve_batch(
     px, py, pz = M[:, 0, 3], M[:, 1, 3], M[:, 2, 3]
     r2 = px * px + py * py
     xs2 = r2 - b * b
-    inside = xs2 < -2.0 * abs(b) * REACH_TOL
+    tol = REACH_TOL + m.slack
+    inside = xs2 < -2.0 * abs(b) * tol
     xs = np.sqrt(np.maximum(xs2, 0.0))
     free = r2 < REACH_TOL * REACH_TOL
     t1r = np.zeros(N) if ref is None else ref[:, 0]
@@ -285,7 +295,7 @@ def solve_batch(
     v = (pz - c1)[:, None]
     rho = np.hypot(u, v)
     ck = (u * u + v * v - (c2 * c2 + L * L)) / (2.0 * c2 * L)  # as the single-pose path
-    ok = (rho <= c2 + L + REACH_TOL) & (rho >= abs(c2 - L) - REACH_TOL) & ~inside[:, None]
+    ok = (rho <= c2 + L + tol) & (rho >= abs(c2 - L) - tol) & ~inside[:, None]
     kappa = np.arccos(np.clip(ck, -1.0, 1.0))
     d = np.where(up == (u >= 0.0), kappa, -kappa)
     t2 = np.arctan2(u, v) - np.arctan2(L * np.sin(d), c2 + L * np.cos(d))

@@ -17,7 +17,9 @@ axes 2, 3 and 4 in the arm plane, signed so that theta2 and theta3 at q = 0 lie 
 along axis 5 from axis 4 to axis 6. theta5 = 0 where axis 6 is parallel to axis 4; the
 straight wrist (the letters' reference) is the parallel value nearest the middle of
 joint 5's limits. The parameters are trusted only when the model's FK matches the
-robot's at random q (:func:`~workcell.robots.axes.verify_fk`, 1e-9). The solvers are in
+robot's at random q (:func:`~workcell.robots.axes.verify_fk`, 1e-9; a rounded file's model within its
+rounding, its solutions then refined on the robot's chain: :mod:`workcell.robots.axes`).
+The solvers are in
 :mod:`workcell.robots.ur_solve`.
 """
 
@@ -31,7 +33,8 @@ from numpy.typing import NDArray
 
 from workcell.errors import KinematicsError
 from workcell.robots.axes import (
-    GEOMETRY_TOL,
+    ANGLE_TOL,
+    OFFSET_TOL,
     AxisModel,
     axis_lines,
     base_frame,
@@ -122,15 +125,15 @@ def ur_model(robot: Robot) -> URModel:
     if robot.dof != 6 or any(j.kind != "revolute" for j in robot.joints):
         raise KinematicsError(f"{where}: it needs 6 revolute joints")
     P, U = axis_lines(robot)
-    tol = GEOMETRY_TOL
+    tol = OFFSET_TOL  # lengths (m); angles are tested against ANGLE_TOL (rad)
     checks = [
         ("axes 1 and 2 are not perpendicular", abs(U[0] @ U[1])),
         ("axes 2 and 3 are not parallel", np.linalg.norm(np.cross(U[1], U[2]))),
         ("axes 3 and 4 are not parallel", np.linalg.norm(np.cross(U[2], U[3]))),
         ("axes 4 and 5 are not perpendicular", abs(U[3] @ U[4])),
         ("axes 5 and 6 are not perpendicular", abs(U[4] @ U[5])),
-    ]
-    bad = [f"{what} ({v:.3g})" for what, v in checks if v > tol]
+    ]  # sines of the angles off perpendicular or parallel
+    bad = [f"{what} ({math.asin(min(v, 1.0)):.3g} rad off)" for what, v in checks if v > ANGLE_TOL]
     gap12, p12, _ = line_gap(P[0], U[0], P[1], U[1])
     gap45, p45, _ = line_gap(P[3], U[3], P[4], U[4])
     gap56, p56, _ = line_gap(P[4], U[4], P[5], U[5])

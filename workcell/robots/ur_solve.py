@@ -61,7 +61,8 @@ def solve_one(
     (r00, r01, r02, px), (r10, r11, r12, py), (r20, r21, r22, pz) = M
     d1, a2, a3, d4, d5, f, st = m.d1, m.a2, m.a3, m.d4, m.d5, m.forward, m.straight
     cos, sin, atan2, sqrt = math.cos, math.sin, math.atan2, math.sqrt
-    r2, hs, why = beside_axis1(px, py, d4, "wrist", "d4")
+    tol = REACH_TOL + m.slack
+    r2, hs, why = beside_axis1(px, py, d4, "wrist", "d4", m.slack)
     if why:
         return [], False, why
     free = r2 < REACH_TOL * REACH_TOL
@@ -91,7 +92,7 @@ def solve_one(
             D = (u * u + v * v - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
             if D > 1.0 or D < -1.0:
                 rho = math.hypot(u, v)
-                if rho > lim + REACH_TOL or rho < abs(abs(a2) - abs(a3)) - REACH_TOL:
+                if rho > lim + tol or rho < abs(abs(a2) - abs(a3)) - tol:
                     reason = (
                         f"out of reach: axis 4 would pass {rho:.4g} m from the shoulder, "
                         f"outside the arm's {abs(abs(a2) - abs(a3)):.4g} .. {lim:.4g} m"
@@ -185,7 +186,8 @@ def solve_batch(
     R, p = M[:, :3, :3], M[:, :3, 3]
     r2 = p[:, 0] ** 2 + p[:, 1] ** 2
     h2 = r2 - d4 * d4
-    inside = h2 < -2.0 * abs(d4) * REACH_TOL
+    tol = REACH_TOL + m.slack
+    inside = h2 < -2.0 * abs(d4) * tol
     hs = np.sqrt(np.maximum(h2, 0.0))
     free = r2 < REACH_TOL * REACH_TOL
     ref1 = np.zeros(N) if ref is None else ref[:, 0]
@@ -217,7 +219,7 @@ def solve_batch(
     qz = p[:, 2, None, None, None] - d5 * (-s6 * r20 - c6 * r21)
     u, v = qx * c1 + qy * s1, qz - d1
     rho = np.hypot(u, v)
-    ok = (rho <= abs(a2) + abs(a3) + REACH_TOL) & (rho >= abs(abs(a2) - abs(a3)) - REACH_TOL)
+    ok = (rho <= abs(a2) + abs(a3) + tol) & (rho >= abs(abs(a2) - abs(a3)) - tol)
     ok &= ~inside[:, None, None, None]
     D = np.clip((u * u + v * v - a2 * a2 - a3 * a3) / (2.0 * a2 * a3), -1.0, 1.0)
     k = np.arccos(D)

@@ -64,7 +64,8 @@ class Pending:
     block); ``rested``: its own part starts at rest (no blend before it); ``length``:
     its programmed tool path (m); ``speed``/``acceleration``: its tool limits (m/s,
     m/s^2; None for joint moves and straight lines); ``end``: the timeline when it ended
-    (a blend needs the timeline unchanged since)."""
+    (a blend needs the timeline unchanged since); ``program``: its record's ``program``
+    (:mod:`workcell.sim.cycle`)."""
 
     robot: str
     command: str
@@ -83,6 +84,7 @@ class Pending:
     speed: float | None = None
     acceleration: float | None = None
     block_move: int | None = None
+    program: dict[str, Any] | None = None
 
 
 @dataclass

@@ -275,6 +275,13 @@ def line_deviation(placement: RobotPlacement, Q: Array, p0: Array, p1: Array) ->
     return float(dev[i]), i
 
 
+def _line_asked(placement: RobotPlacement, target: Array) -> dict[str, object]:
+    """A straight line's ``program`` record (:mod:`workcell.sim.cycle`): its target in the
+    robot's base frame, no tool speed (the joints' limits or the thesis's timing)."""
+    Tb = invert(placement.base) @ target
+    return {"kind": "line", "pose": Tb.tolist(), "speed": None, "acceleration": None, "zone": 0.0}
+
+
 class CartesianCommands:
     """``move_end_effector`` and ``move_straight_line`` (a mixin of Simulator)."""
 
@@ -289,10 +296,13 @@ class CartesianCommands:
     ) -> None:
         """Move the tool to the world pose ``T`` (4x4, m): IK, then a joint move.
 
-        ``config``: configuration letters to require (e.g. "ru"); default: the
-        in-limit solution nearest the current joints. ``zone`` (m): blend into the next
+        ``config``: configuration letters to require (e.g. "ru"): the in-limit solution
+        of that configuration nearest the current joints. Default: of the in-limit
+        solutions, nearest first, the first whose joint move keeps the planning clearance
+        (checked as ``plan`` checks: :mod:`workcell.sim.planned`), else the nearest; the
+        move's event says which configuration and why. ``zone`` (m): blend into the next
         move. Raises UnreachableError saying why. With ``plan``, a collision-free joint
-        path to the nearest solution that has one (:mod:`workcell.plan.motion`; it stops
+        path to the nearest solution that has one (:mod:`workcell.sim.planned`; it stops
         at its end: no zone); PlanningError when the pose is unreachable, every solution
         is in collision or no path is found.
         """
@@ -306,8 +316,11 @@ class CartesianCommands:
             raise UnreachableError(f"move_end_effector '{name}': {exc}") from exc
         if plan:
             self._move_planned(name, sols, "move_end_effector")
-        else:
-            self._move(name, sols[0], "move_end_effector", zone)
+            return
+        pick, why = (0, "") if config is not None else self._default_solution(name, sols)
+        Tb = invert(self.cell.robots[name].base) @ target
+        asked = {"pose": Tb.tolist(), "config": config}
+        self._move(name, sols[pick], "move_end_effector", zone, note=why, program=asked)
 
     def move_straight_line(
         self, robot: str, T: ArrayLike, step: float = 0.005, *, max_jump: float = math.radians(10)
@@ -337,7 +350,7 @@ class CartesianCommands:
             detail = f"{length * 1e3:.4g} mm line"
             self._path_move(
                 name, command, detail, CartesianPath([line]), None, None, 0.0,
-                step=float(step), max_jump=float(max_jump),
+                step=float(step), max_jump=float(max_jump), program=_line_asked(placement, target),
             )  # fmt: skip
             return
         q0 = self.joints(name)
@@ -359,6 +372,8 @@ class CartesianCommands:
                 f"line at t = {t0 + motion.t[i]:.4g} s (line_tolerance "
                 f"{self.line_tolerance * 1e3:.3g} mm); use a smaller step"
             )
-        rec = command_record(name, command, t0, motion.duration, motion.activity)
+        program = self._program_settings(name, _line_asked(placement, target))
+        program["q"] = Qw[-1].tolist()
+        rec = command_record(name, command, t0, motion.duration, motion.activity, program=program)
         detail = f"{length * 1e3:.4g} mm line, {len(Qw)} samples"
         self._run(name, t0 + motion.t, motion.rows, command, detail, rec)

@@ -15,7 +15,15 @@ when a zone move is blended into the next one. A record is a plain dict:
   the longest part of the command wins; None for commands that take no time,
   ``"wait"`` for waits;
 - ``zone_m``: the zone the command's end was blended with (0: it stopped there), and
-  ``note`` when there is something to say (a zone clipped, a zone not used).
+  ``note`` when there is something to say (a zone clipped, a zone not used);
+- ``program`` (kept on the event, left out of the report): what the command was asked to
+  do, for :mod:`workcell.robotprog` to write it again in a robot language: ``kind``
+  (``"joint"``, ``"linear"``, ``"circular"``, ``"line"``, ``"path"``, ``"gripper"``,
+  ``"wait"``), its targets in the robot's base frame (``q`` rad/m, ``pose`` 4x4 m as
+  nested lists, ``via`` (3,) m, ``waypoints``), the programmed ``zone`` (m), tool
+  ``speed`` (m/s) and ``acceleration`` (m/s^2), the requested ``config``, and the motion
+  settings in effect (``profile``, the robot's thesis ``robot_speed`` rad/s, the
+  simulator's ``profile_acceleration`` rad/s^2, ``override``).
 
 :func:`cycle_report` collects them; :func:`format_table` prints them for people.
 """
@@ -45,8 +53,10 @@ def command_record(
     *,
     zone: float = 0.0,
     note: str = "",
+    program: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """A command's record (module doc); ``activity``: seconds per limit, or the name."""
+    """A command's record (module doc); ``activity``: seconds per limit, or the name;
+    ``program``: what the command was asked to do (module doc)."""
     limit = activity if isinstance(activity, str) or activity is None else limited_by(activity)
     rec: dict[str, Any] = {
         "robot": robot,
@@ -58,14 +68,18 @@ def command_record(
     }
     if note:
         rec["note"] = note
+    if program is not None:
+        rec["program"] = dict(program)
     return rec
 
 
 def cycle_report(events: Iterable[Event], total: float) -> dict[str, Any]:
-    """``{"total_s", "commands"}``: the records on ``events``, in order of their start."""
+    """``{"total_s", "commands"}``: the records on ``events``, in order of their start
+    (without their ``program``)."""
     recs = [e.data for e in events if e.data is not None]
     order = sorted(range(len(recs)), key=lambda i: (recs[i]["t_start"], i))
-    return {"total_s": float(total), "commands": [dict(recs[i]) for i in order]}
+    out = [{k: v for k, v in recs[i].items() if k != "program"} for i in order]
+    return {"total_s": float(total), "commands": out}
 
 
 def format_table(report: Mapping[str, Any]) -> str:

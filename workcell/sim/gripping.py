@@ -150,7 +150,13 @@ class GripperCommands:
                 "grasp",
                 f"grasp '{part}': axis {math.degrees(chosen.angle):.3g} deg, width "
                 f"{chosen.width * 1e3:.4g} mm, distance {chosen.distance * 1e3:.3g} mm",
-                data=command_record(name, "close_gripper", self.sim_time, 0.0),
+                data=command_record(
+                    name,
+                    "close_gripper",
+                    self.sim_time,
+                    0.0,
+                    program={"kind": "gripper", "closed": True},
+                ),
             )
         return part
 
@@ -161,7 +167,7 @@ class GripperCommands:
         that robot carries it from now on. Released in mid-air (more than the contact
         tolerance above what is below it), it gets a ``warning`` event; with ``settle`` it
         drops straight onto the highest support below it instead, in one frame
-        (:mod:`workcell.plan.resting`).
+        (:mod:`workcell.sim.resting`).
         """
         name = self._robot(robot)
         self._not_in_block("open_gripper")
@@ -187,7 +193,10 @@ class GripperCommands:
                         hold.quat,
                     )
                 )
-            rec = command_record(name, "open_gripper", self.sim_time, 0.0)
+            rec = command_record(
+                name, "open_gripper", self.sim_time, 0.0,
+                program={"kind": "gripper", "closed": False},
+            )  # fmt: skip
             if hold is None:
                 self.timeline.add_event(
                     self.sim_time, name, "open", "open_gripper: nothing held", data=rec

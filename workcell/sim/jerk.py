@@ -21,12 +21,14 @@ x f, accelerations x f^2, jerks x f^3, so a motion keeps its path and takes 1/f 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 from ruckig import InputParameter, Result, Ruckig, RuckigError, Synchronization, Trajectory
 
+from workcell import limits as work_limits
 from workcell.errors import ProgramError
 from workcell.robots.robot import Robot
 
@@ -119,6 +121,24 @@ class JerkMove:
         return out
 
 
+def least_time(distance: Array, limits: Limits, *, from_rest: bool = True) -> float:
+    """A lower bound (s) of any motion over ``distance`` (per joint, >= 0) within
+    ``limits``: each joint needs distance / speed, and from rest also 2 sqrt(distance /
+    acceleration) and cbrt(32 distance / jerk) (the bang-bang times); inf when a joint
+    that moves has a limit of 0 (an override of 1e-320 underflows to 0)."""
+    moving = distance > 0
+    if not np.any(moving):
+        return 0.0
+    d = distance[moving]
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        bounds = [d / limits.speed[moving]]
+        if from_rest:
+            bounds.append(2.0 * np.sqrt(d / limits.acceleration[moving]))
+            bounds.append(np.cbrt(32.0 * d / limits.jerk[moving]))
+    t = max(float(np.max(b)) for b in bounds)
+    return t if t == t else math.inf  # NaN (0/0 cannot happen: d > 0) taken as never
+
+
 def plan_jerk(
     q0: Array,
     q1: Array,
@@ -136,6 +156,12 @@ def plan_jerk(
     Raises ProgramError when ruckig finds no motion (a state outside the limits).
     """
     n = len(q0)
+    rest0 = v0 is None and a0 is None
+    work_limits.check(
+        "max_sim_time",
+        least_time(np.abs(np.asarray(q1, float) - q0), limits, from_rest=rest0),
+        "a jerk-limited move, at least (its speed, override or acceleration is too small)",
+    )  # before ruckig, which fails on limits that underflowed (an override of 1e-100)
     otg = Ruckig(n)  # offline; never with waypoints (module doc)
     inp = InputParameter(n)
     inp.current_position = q0.tolist()

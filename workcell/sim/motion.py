@@ -37,6 +37,7 @@ from workcell.sim.cartesian import world_target
 from workcell.sim.cycle import cycle_report
 from workcell.sim.motion_run import DEFAULT_TOOL_ACCELERATION, MotionRunner
 from workcell.sim.paths import CartesianPath, Line, arc_through
+from workcell.spatial import invert
 
 if TYPE_CHECKING:
     from workcell.sim.simulator import Simulator
@@ -111,7 +112,8 @@ class MotionCommands(MotionRunner):
                 "has no tool speed); use move_end_effector or move_straight_line"
             )
         detail = f"{line.length * 1e3:.4g} mm line at {v * 1e3:.4g} mm/s"
-        self._path_move(name, command, detail, CartesianPath([line]), v, a, z)
+        program = _asked("linear", self, name, target, v, a, z)
+        self._path_move(name, command, detail, CartesianPath([line]), v, a, z, program=program)
 
     def move_circular(
         self: Simulator,
@@ -137,9 +139,20 @@ class MotionCommands(MotionRunner):
             start[:3, 3], p_via, target[:3, 3], start[:3, :3], target[:3, :3], f"{command} '{name}'"
         )
         detail = f"{arc.length * 1e3:.4g} mm arc (radius {arc.radius * 1e3:.4g} mm) at {v * 1e3:.4g} mm/s"
-        self._path_move(name, command, detail, CartesianPath([arc]), v, a, z)
+        program = _asked("circular", self, name, target, v, a, z)
+        program["via"] = (invert(self.cell.robots[name].base) @ np.append(p_via, 1.0))[:3].tolist()
+        self._path_move(name, command, detail, CartesianPath([arc]), v, a, z, program=program)
 
     # ------------------------------------------------------------------ internals
+
+
+def _asked(
+    kind: str, sim: Simulator, name: str, target: Array, v: float, a: float, z: float
+) -> dict[str, Any]:
+    """A Cartesian move's ``program`` record (:mod:`workcell.sim.cycle`): the target in the
+    robot's base frame, the tool speed and acceleration before the override, the zone."""
+    Tb = invert(sim.cell.robots[name].base) @ target
+    return {"kind": kind, "pose": Tb.tolist(), "speed": v, "acceleration": a, "zone": z}
 
 
 def _via_point(via: ArrayLike, name: str) -> Array:

@@ -101,8 +101,18 @@ class MotionRunner:
         except JointLimitError as exc:
             raise JointLimitError(f"{command} '{name}': target refused: {exc}") from exc
 
-    def _move(self: Simulator, name: str, target: Array, command: str, zone: float = 0.0) -> None:
-        """A joint move to ``target`` (rad/m), blending out of the robot's pending move."""
+    def _move(
+        self: Simulator,
+        name: str,
+        target: Array,
+        command: str,
+        zone: float = 0.0,
+        note: str = "",
+        program: dict[str, Any] | None = None,
+    ) -> None:
+        """A joint move to ``target`` (rad/m), blending out of the robot's pending move;
+        ``note`` is added to its event (why this target); ``program``: what the command was
+        asked (its record's, :mod:`workcell.sim.cycle`)."""
         placement = self.cell.robots[name]
         self._check_target(name, target, command)
         z = self._zone(command, name, zone)
@@ -114,7 +124,9 @@ class MotionRunner:
             length = float(tool_lengths(placement, motion.rows_of(), q0)[-1])
         if pend is not None and motion.law is not None:
             blend = joint_blend(pend, motion, length, placement, self._limits(name), self.dt)
-        self._commit(name, command, f"to ({deg}) deg", motion, z, blend, pend, length)
+        detail = f"to ({deg}) deg" + (f", {note}" if note else "")
+        program = {"kind": "joint", **(program or {}), "q": target.tolist(), "zone": z}
+        self._commit(name, command, detail, motion, z, blend, pend, length, program=program)
 
     def _path_move(
         self: Simulator,
@@ -128,8 +140,10 @@ class MotionRunner:
         *,
         step: float = _STEP,
         max_jump: float = _MAX_JUMP,
+        program: dict[str, Any] | None = None,
     ) -> None:
-        """A Cartesian move along ``path`` (tool limits before the override)."""
+        """A Cartesian move along ``path`` (tool limits before the override); ``program``:
+        what the command was asked (its record's, :mod:`workcell.sim.cycle`)."""
         f = self._override[name]
         v = None if speed is None else speed * f
         a = None if acceleration is None else acceleration * f * f
@@ -142,7 +156,10 @@ class MotionRunner:
                     step=step, max_jump=max_jump, command=command,
                 )  # fmt: skip
                 if blend is not None:
-                    self._commit(name, command, detail, None, zone, blend, pend, path.length, v, a)
+                    self._commit(
+                        name, command, detail, None, zone, blend, pend, path.length, v, a,
+                        program=program,
+                    )  # fmt: skip
                     return
             q0 = self.joints(name)
             s = sample_params(path, step)
@@ -168,7 +185,9 @@ class MotionRunner:
                 blend = joint_blend(pend, motion, path.length, placement, limits, self.dt)
         except UnreachableError as exc:
             raise UnreachableError(f"{command} '{name}': {exc}") from exc
-        self._commit(name, command, detail, motion, zone, blend, pend, path.length, v, a)
+        self._commit(
+            name, command, detail, motion, zone, blend, pend, path.length, v, a, program=program
+        )
 
     def _blendable(self: Simulator, name: str) -> Pending | None:
         """The robot's pending zone move, if the next move may still blend out of it."""
@@ -195,8 +214,17 @@ class MotionRunner:
         length: float,
         speed: float | None = None,
         acceleration: float | None = None,
+        *,
+        program: dict[str, Any] | None = None,
     ) -> None:
-        """Run a planned move (or a corner and the move), then note it as pending."""
+        """Run a planned move (or a corner and the move), then note it as pending;
+        ``program`` goes on its record with the motion settings and the joints it ends at."""
+        if program is not None:
+            program = self._program_settings(name, program)
+            if "q" not in program:
+                law = motion.law if blend is None else blend.next_law  # type: ignore[union-attr]
+                end = law.q_end if isinstance(law, PathMotion) else motion.rows_of()[-1]  # type: ignore[union-attr]
+                program["q"] = np.asarray(end, dtype=np.float64).tolist()
         if blend is None:
             assert motion is not None
             start = self._start_time(name)
@@ -205,14 +233,16 @@ class MotionRunner:
                 note = (
                     f"zone not used: profile '{self.profile}' joint moves stop (zones need 'jerk')"
                 )
-            rec = command_record(name, command, start, motion.duration, motion.activity, note=note)
+            rec = command_record(
+                name, command, start, motion.duration, motion.activity, note=note, program=program
+            )
             first = self._next_index(name)
             self._run(name, start + motion.t, motion.rows, command, detail, rec)
             law, t0, times, head, rested = motion.law, start, start + motion.t, {}, True
             activity, t_start = motion.activity, start
         else:
             assert pend is not None
-            first, t_start = self._run_blend(name, pend, blend, command, detail)
+            first, t_start = self._run_blend(name, pend, blend, command, detail, program)
             law, t0, rested = blend.next_law, blend.next_t0, False
             times = blend.b_times[blend.next_first :]
             first += blend.next_first
@@ -222,8 +252,18 @@ class MotionRunner:
             self._pending[name] = Pending(
                 name, command, detail, zone, law, t0, times, first, rested, t_start,
                 activity, head, length, self.timeline.mark(), speed, acceleration,
-                None if self._block is None else len(self._block.moves) - 1,
+                None if self._block is None else len(self._block.moves) - 1, program,
             )  # fmt: skip
+
+    def _program_settings(self: Simulator, name: str, program: dict[str, Any]) -> dict[str, Any]:
+        """``program`` with the motion settings in effect (:mod:`workcell.sim.cycle`)."""
+        return {
+            **program,
+            "profile": self.profile,
+            "robot_speed": self._speed[name],
+            "profile_acceleration": self.acceleration,
+            "override": self._override[name],
+        }
 
     def _next_index(self: Simulator, name: str) -> int:
         """Where the next frame of ``name`` goes: a timeline frame index (0 in a block)."""
@@ -283,16 +323,23 @@ class MotionRunner:
                 bar.update(hi - lo)
 
     def _run_blend(
-        self: Simulator, name: str, p: Pending, b: Blend, command: str, detail: str
+        self: Simulator,
+        name: str,
+        p: Pending,
+        b: Blend,
+        command: str,
+        detail: str,
+        program: dict[str, Any] | None = None,
     ) -> tuple[int, float]:
         """Take back the pending move's tail and run the corner and the new move (module
         doc of :mod:`workcell.sim.blending`). Returns the index of the new move's first
         frame (timeline, or row of its block move) and the new move's start time."""
         a_rec = command_record(
-            name, p.command, p.t_start, b.a_end - p.t_start, b.a_activity, zone=b.zone, note=b.note
-        )
+            name, p.command, p.t_start, b.a_end - p.t_start, b.a_activity, zone=b.zone,
+            note=b.note, program=p.program,
+        )  # fmt: skip
         b_dur = float(b.b_times[-1]) - b.a_end if len(b.b_times) else 0.0
-        b_rec = command_record(name, command, b.a_end, b_dur, b.b_activity)
+        b_rec = command_record(name, command, b.a_end, b_dur, b.b_activity, program=program)
         a_detail = f"{p.command} {p.detail}, blended into {command} (zone {b.zone * 1e3:.4g} mm)"
         b_detail = f"{command} {detail}, out of a {b.zone * 1e3:.4g} mm zone"
         if len(b.b_times):

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from workcell.cell.compile import CompiledCell
 from workcell.cell.workcell import Workcell
-from workcell.sim.timeline import Event, Timeline
+from workcell.sim.timeline import Events, Timeline
 from workcell.spatial import pose_from_pos_quat
 
 __all__ = ["PhysicsResult", "SettledPart", "Tracking"]
@@ -163,8 +163,8 @@ class PhysicsResult:
     commands: list[dict[str, Any]] = field(default_factory=list)
 
     @property
-    def events(self) -> tuple[Event, ...]:
-        """The timeline's events."""
+    def events(self) -> Events:
+        """The timeline's events: ``result.events()`` or ``result.events`` (the same)."""
         return self.timeline.events
 
     @property

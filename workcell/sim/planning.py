@@ -18,6 +18,16 @@ modes (thesis §4.4):
 
 :func:`plan_waypoints` goes through joint waypoints, linearly in joints between them at
 the robot's speed (a straight line's samples, the thesis's timing).
+
+A move in which no joint moves more than :data:`STILL` (1e-12 rad, or m for a prismatic
+joint) is no move: no frames and no time, in every profile. That is a million times
+below an encoder count of any robot here, and above where the jerk profile's own
+arithmetic ends: ruckig takes a move shorter than its position precision as already at
+its target (measured: 5.6e-17 to 5.6e-13 rad over speed limits of 1 mrad/s to 100 rad/s,
+accelerations of 1e-4 to 200 rad/s^2 and jerks of 1e-6 to 1e4 rad/s^3), while the
+minimum time of a jerk-limited move grows as the cube root of its length (a 1.6e-33 rad
+move would "take" 7.1e-12 s). Without one threshold for all, profiles would disagree on
+moves that differ from standing still only in the last bits of a float.
 """
 
 from __future__ import annotations
@@ -35,9 +45,19 @@ from workcell.sim import profiles
 from workcell.sim.jerk import Limits, plan_jerk
 from workcell.sim.profiles import step_times
 
-__all__ = ["Motion", "Rows", "frames_of", "law_rows", "plan_move", "plan_waypoints"]
+__all__ = [
+    "STILL",
+    "Motion",
+    "Rows",
+    "check_frames",
+    "frames_of",
+    "law_rows",
+    "plan_move",
+    "plan_waypoints",
+]
 
 Array = NDArray[np.float64]
+STILL = 1e-12  # rad (m): a move whose joints all move at most this far is no move
 Rows = Array | Callable[[int, int], Array]  # joint rows of a plan, or rows(lo, hi)
 
 
@@ -66,9 +86,25 @@ class Motion:
 
 def frames_of(duration: float, dt: float, what: str) -> Array:
     """The sample times of a motion of ``duration`` (s) every ``dt`` (s), after checking
-    the work budget (``max_frames_per_command``, naming ``what``) before they are made."""
-    work_limits.check("max_frames_per_command", math.ceil(duration / dt), what)
+    the work budget (``max_frames_per_command``, naming ``what``) before they are made. A
+    duration that overflows (a speed, override or acceleration of 1e-320) is over
+    ``max_sim_time``."""
+    check_frames(duration, dt, 0, what)
     return step_times(duration, dt)  # (which checks again, without the command's name)
+
+
+def check_frames(duration: float, dt: float, extra: int, what: str) -> None:
+    """The work budget of a motion of ``duration`` (s) sampled every ``dt`` (s) plus
+    ``extra`` frames: ``max_frames_per_command``, and ``max_sim_time`` for a duration that
+    overflowed (a speed, override or acceleration of 1e-320). Counted in floats: a count
+    of 1e300 frames is refused, never turned into an integer."""
+    if not math.isfinite(duration):
+        work_limits.check(
+            "max_sim_time",
+            duration,
+            f"{what}: the motion's duration (its speed, override or acceleration is too small)",
+        )
+    work_limits.check("max_frames_per_command", duration / dt + extra, what)
 
 
 def law_rows(law: Any, t: Array, target: Array) -> Rows:
@@ -100,11 +136,11 @@ def plan_move(
 ) -> Motion:
     """One move from ``q0`` to ``target`` (module doc) at ``speed`` (rad/s, the joint that
     moves most; thesis profiles) or within ``limits`` (profile "jerk"), sampled every
-    ``dt`` (s). No motion gives no frames; more than the work budget's frames per
-    command raise LimitError naming ``what``."""
+    ``dt`` (s). No motion (no joint moving more than :data:`STILL`) gives no frames;
+    more than the work budget's frames per command raise LimitError naming ``what``."""
     delta = target - q0
     big = float(np.max(np.abs(delta))) if len(delta) else 0.0
-    if big == 0.0:
+    if big <= STILL:
         return Motion(np.empty(0), np.empty((0, len(q0))))
     jerk = profile == "jerk"
     if not joint_by_joint:  # path and playback: eq. 4.27, 4.28
@@ -147,7 +183,7 @@ def plan_move(
     q = q0.copy()
     now = 0.0
     total = sum(shapes[i][0] for i in moving)
-    work_limits.check("max_frames_per_command", math.ceil(total / dt) + len(moving), what)
+    check_frames(total, dt, len(moving), what)
     for i in moving:
         Ti, at, act = shapes[i]
         t = step_times(Ti, dt)
@@ -174,8 +210,9 @@ def plan_waypoints(
     steps = (
         np.abs(np.diff(np.vstack([q0, waypoints]), axis=0)).max(axis=1) if len(waypoints) else []
     )
-    total = float(np.sum(steps)) / speed
-    work_limits.check("max_frames_per_command", math.ceil(total / dt) + len(waypoints), what)
+    with np.errstate(divide="ignore", over="ignore"):
+        total = float(np.sum(steps)) / speed if speed > 0 else math.inf
+    check_frames(total, dt, len(waypoints), what)
     times, rows = [np.empty(0)], [np.empty((0, len(q0)))]
     now, prev = 0.0, q0
     for q in waypoints:

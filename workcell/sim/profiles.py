@@ -39,6 +39,8 @@ def duration(profile: str, distance: float, speed: float, acceleration: float) -
     """Duration (s) of a motion of ``distance`` at peak ``speed`` (see the module doc)."""
     if distance <= 0:
         return 0.0
+    if not (speed > 0 and (profile != "trapezoid" or acceleration > 0)):
+        return math.inf  # a speed that underflowed (1e-320 x an override): it never ends
     if profile == "linear":
         return distance / speed
     if profile == "quintic":

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from workcell.sim.timeline import Event
+from workcell.sim.timeline import Events
 
 if TYPE_CHECKING:
     from workcell.sim.simulator import Simulator
@@ -40,8 +40,9 @@ class ReadBack:
         return len(self.timeline)
 
     @property
-    def events(self: Simulator) -> tuple[Event, ...]:
-        """The timeline's events."""
+    def events(self: Simulator) -> Events:
+        """The timeline's events, in order: ``sim.events()`` (read-outs are calls), or
+        ``sim.events`` (the same tuple)."""
         return self.timeline.events
 
     def joints(self: Simulator, robot: str) -> Array:

@@ -52,10 +52,11 @@ Several robots at once (beyond the thesis; :mod:`workcell.sim.concurrent`): insi
 ``with sim.concurrently():`` each robot's motion commands start together and the frames
 are merged, so the clock advances by the longest robot's time.
 
-Planning and task level (beyond the thesis; :mod:`workcell.plan`): ``plan=True`` on
-``move_joints_absolute`` and ``move_end_effector`` moves along a collision-free path
-(OMPL), ``pick``, ``place`` and ``handover`` choose poses, configurations and paths
-themselves; a part released in mid-air gets a ``warning`` event, or drops onto what is
+Planning and task level (beyond the thesis; :mod:`workcell.sim.planned`,
+:mod:`workcell.sim.task_commands`, calling the planners of :mod:`workcell.plan`):
+``plan=True`` on ``move_joints_absolute`` and ``move_end_effector`` moves along a
+collision-free path (OMPL), ``pick``, ``place`` and ``handover`` choose poses,
+configurations and paths themselves; a part released in mid-air gets a ``warning`` event, or drops onto what is
 below it with ``open_gripper(..., settle=True)``.
 
 Profiles (``profile``; :mod:`workcell.sim.profiles`): the thesis's constant speed
@@ -88,9 +89,6 @@ from workcell.checks import is_finite_number, quote_angle
 from workcell.errors import (
     ProgramError,
 )
-from workcell.plan.motion import PlanningCommands
-from workcell.plan.resting import RestingCommands
-from workcell.plan.tasks import TaskCommands
 from workcell.sim import profiles
 from workcell.sim.blending import Pending
 from workcell.sim.cartesian import CartesianCommands
@@ -105,8 +103,11 @@ from workcell.sim.frames import FrameRunner
 from workcell.sim.gripping import GraspRecord, GripperCommands, Hold
 from workcell.sim.jogging import JogCommands
 from workcell.sim.motion import MotionCommands
+from workcell.sim.planned import PlanningCommands
 from workcell.sim.profiles import step_times
 from workcell.sim.readback import ReadBack
+from workcell.sim.resting import RestingCommands
+from workcell.sim.task_commands import TaskCommands
 from workcell.sim.timeline import DEFAULT_MEMORY_LIMIT, Timeline
 
 __all__ = ["JOINT_BY_JOINT_CLOCKS", "MODES", "Hold", "Simulator", "step_times"]
@@ -260,7 +261,7 @@ class Simulator(
         """Move the robot's joints to ``q`` (rad/m), or to one of its named poses
         (``"home"``), in the simulator's mode; ``zone`` (m): blend into the next move
         (:mod:`workcell.sim.blending`); with ``plan``, along a collision-free path
-        (:mod:`workcell.plan.motion`; PlanningError when none; a planned path stops at
+        (:mod:`workcell.sim.planned`; PlanningError when none; a planned path stops at
         its end: no zone)."""
         name = self._robot(robot)
         if isinstance(q, str):
@@ -306,7 +307,8 @@ class Simulator(
                 self.timeline.append(self.sim_time + s, self._wall, self.data.qpos)
                 self.sim_time += s
                 self._wall += time.perf_counter() - c0
-            rec = command_record(None, "wait", self.sim_time - s, s, "wait")
+            asked = {"kind": "wait", "seconds": s}
+            rec = command_record(None, "wait", self.sim_time - s, s, "wait", program=asked)
             self.timeline.add_event(self.sim_time, None, "wait", f"wait {s:.6g} s", data=rec)
 
     def _log_error(self, exc: BaseException, robot: str | None = None) -> None:

@@ -32,7 +32,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from workcell import limits
 
-__all__ = ["DEFAULT_CHUNK", "DEFAULT_MEMORY_LIMIT", "Event", "Timeline", "TimelineMark"]
+__all__ = [
+    "DEFAULT_CHUNK",
+    "DEFAULT_MEMORY_LIMIT",
+    "Event",
+    "Events",
+    "Timeline",
+    "TimelineMark",
+]
 
 DEFAULT_CHUNK = 4096
 DEFAULT_MEMORY_LIMIT = 32 * 2**20  # bytes of frames kept in memory before spilling
@@ -64,6 +71,20 @@ class Event(NamedTuple):
             "detail": self.detail,
             "frame": self.frame,
         }
+
+
+class Events(tuple[Event, ...]):
+    """The events of a run, in order: a tuple that is also callable.
+
+    Read-outs of a run are calls (``sim.events()``, ``sim.summary()``,
+    ``sim.cycle_time()``, ``sim.part_positions()``); ``sim.events`` without the call is
+    the same tuple, as DESIGN.md's contract spells it, and keeps working unchanged."""
+
+    __slots__ = ()
+
+    def __call__(self) -> Events:
+        """The events (this tuple): ``sim.events()`` reads like ``sim.summary()``."""
+        return self
 
 
 class TimelineMark(NamedTuple):
@@ -277,9 +298,9 @@ class Timeline:
 
     # ------------------------------------------------------------------ events
     @property
-    def events(self) -> tuple[Event, ...]:
-        """Every event, in order."""
-        return tuple(self._events)
+    def events(self) -> Events:
+        """Every event, in order (a tuple, also callable: :class:`Events`)."""
+        return Events(self._events)
 
     def add_event(
         self,

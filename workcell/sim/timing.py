@@ -64,13 +64,52 @@ def sample_params(path: CartesianPath, step: float) -> Array:
         path.span / step,
         f"a {path.span:.4g} m {what} sampled every {step:g} m",
     )
-    out = [np.zeros(1)]
     step = min(step, path.span / (_MIN_GRID - 1)) if path.span > 0 else step
-    for k, p in enumerate(path.pieces):
-        h = min(step, p.max_step)
-        n = max(1, math.ceil(p.span / h - 1e-9), math.ceil(p.angle / _ANGLE_STEP - 1e-9))
+    counts = [
+        max(
+            1,
+            math.ceil(p.span / min(step, p.max_step) - 1e-9),
+            math.ceil(p.angle / _ANGLE_STEP - 1e-9),
+        )
+        for p in path.pieces
+    ]
+    work_limits.check(
+        "max_path_samples",
+        sum(counts),
+        f"a {path.span:.4g} m {what} sampled every {step:g} m: IK solutions",
+    )
+    out = [np.zeros(1)]
+    for k, (p, n) in enumerate(zip(path.pieces, counts, strict=True)):
         out.append(path.starts[k] + p.span * np.arange(1, n + 1) / n)
     return np.concatenate(out)
+
+
+def _least_time(
+    Q: Array,
+    vj: Array,
+    aj: Array,
+    path: CartesianPath,
+    speed: tuple[Array, Array] | None,
+    acceleration: tuple[Array, Array] | None,
+    from_rest: bool,
+) -> float:
+    """A lower bound (s) of any time law of the path: each joint's travel through the
+    samples Q over its speed bound ``vj``, the path's length over the highest tool speed,
+    and from rest to rest 2 sqrt(distance / acceleration) for the tool and each joint
+    (inf when a bound underflowed to 0: an override of 1e-320)."""
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        travel = np.abs(np.diff(Q, axis=0)).sum(axis=0) if len(Q) > 1 else np.zeros(len(vj))
+        bounds = [np.where(travel > 0, travel / vj, 0.0)]
+        L = np.float64(path.span)
+        if speed is not None and L > 0:
+            bounds.append(L / np.max(speed[1]))
+        if from_rest:
+            net = np.abs(Q[-1] - Q[0]) if len(Q) > 1 else np.zeros(len(aj))
+            bounds.append(np.where(net > 0, 2.0 * np.sqrt(net / aj), 0.0))
+            if acceleration is not None and L > 0:
+                bounds.append(2.0 * np.sqrt(L / np.max(acceleration[1])))
+        t = max(float(np.max(b, initial=0.0)) for b in bounds)
+    return t if t == t else math.inf
 
 
 def _toppra() -> Any:
@@ -165,9 +204,18 @@ def time_path(
     m = JOINT_MARGIN * scale
     vj = np.where(np.isfinite(limits.speed), limits.speed * m, _UNLIMITED)
     aj = np.where(np.isfinite(limits.acceleration), limits.acceleration * m, _UNLIMITED)
+    least = _least_time(Q, vj, aj, path, speed, acceleration, from_rest=sd_start == 0.0)
+    work_limits.check(
+        "max_sim_time",
+        least,
+        "a path timed within its limits, at least (its speed, override or acceleration is "
+        "too small)",
+    )  # before toppra, whose numbers fail on limits of 1e-100 (a law of 0 s)
     law = None
     for attempt in range(refinements + 1):
         law = _time_once(robot, base_inv, path, Q, s_knots, vj, aj, speed, acceleration, sd_start)
+        if law is not None and law.duration < 0.5 * least:
+            return None  # far faster than the limits allow: the numbers failed, no law
         if law is None or attempt == refinements:
             return law
         # check points: every interval's middle, more where the joint rates change fast

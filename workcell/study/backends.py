@@ -27,6 +27,7 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
+from workcell import limits
 from workcell.errors import StudyError
 from workcell.study.candidates import Candidate
 from workcell.study.evaluation import Setup, error_row, evaluate_batch
@@ -231,6 +232,8 @@ def backend(
         isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
     ):
         raise StudyError(f"workers must be an integer >= 1, got {workers!r}")
+    if workers is not None and (name == "process" or address is None):  # started here
+        limits.check("max_workers", workers, f"a {name} backend of {workers} workers")
     if batch_size is not None and (not isinstance(batch_size, int) or batch_size < 1):
         raise StudyError(f"batch_size must be an integer >= 1, got {batch_size!r}")
     if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:

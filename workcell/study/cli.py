@@ -79,6 +79,11 @@ def _study(args: argparse.Namespace) -> int:
     print(f"results: {outcome.out / 'results.parquet'}")
     for what, path in outcome.files.items():
         print(f"{what}: {path}")
+    if not args.no_plots and "histogram" not in outcome.files:
+        print(
+            f"no cycle-time histogram: none of the {outcome.table.num_rows} candidate(s) is "
+            "feasible (results.parquet's error column says why)"
+        )
     return 0
 
 

@@ -1,12 +1,16 @@
 """Pictures of a study's results (matplotlib's Agg canvas, PNG; no window, no pyplot).
 
 - ``cycle_time_xy.png``: the candidates over a placement plane, each a square coloured by
-  its cycle time (the colour bar in seconds), infeasible ones as red crosses, the best as
-  a star. The plane is the first robot base varied in both x and y (else a part's x and y,
-  else the first two numeric parameters). Where candidates share a point (other
-  parameters varied too) the point shows the best of them, infeasible only when all are.
+  its cycle time (one colour bar in seconds for all panels), infeasible ones as red
+  crosses, the best as a star. The plane is the first robot base varied in both x and y
+  (else a part's x and y, else the first two numeric parameters). A study that varies
+  which robot stands somewhere (``ROBOT.robot``) gets one panel per robot, so no robot
+  is drawn over another. Where candidates of a panel share a point (other parameters
+  varied too), the square shows the best of the feasible ones and a red cross marks any
+  infeasible one: no infeasible candidate is hidden.
 - ``cycle_time_hist.png``: the distribution of the feasible candidates' cycle times, the
-  best marked.
+  best marked; not written when no candidate is feasible (nothing to show: the
+  command line says so instead).
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ import pyarrow as pa
 from workcell.files import atomic_path
 from workcell.study.spec import Parameter
 
-__all__ = ["HIST_PNG", "XY_PNG", "placement_axes", "plot_study"]
+__all__ = ["HIST_PNG", "XY_PNG", "placement_axes", "placement_figure", "plot_study"]
 
 XY_PNG = "cycle_time_xy.png"
 HIST_PNG = "cycle_time_hist.png"
@@ -50,51 +54,95 @@ def _save(fig: Any, path: Path) -> Path:
     return path
 
 
-def _xy_plot(rows: list[dict[str, Any]], px: Parameter, py: Parameter, path: Path) -> Path:
-    from matplotlib.figure import Figure
-
-    cells: dict[tuple[float, float], list[dict[str, Any]]] = {}
+def _panels(
+    rows: list[dict[str, Any]], texts: Sequence[Parameter]
+) -> list[tuple[str, list[dict[str, Any]]]]:
+    """(title, rows) per combination of the named parameters' values (robot choices), in
+    the order they first appear; one untitled panel when none is varied."""
+    groups: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
     for r in rows:
-        cells.setdefault((r[px.name], r[py.name]), []).append(r)
-    good, bad = [], []
-    for (x, y), group in cells.items():
-        ok = [r["cycle_time_s"] for r in group if r["feasible"]]
-        (good if ok else bad).append((x, y, min(ok) if ok else math.nan))
+        groups.setdefault(tuple(r[p.name] for p in texts), []).append(r)
+    return [
+        (", ".join(f"{p.target} = {v}" for p, v in zip(texts, key, strict=True)), group)
+        for key, group in groups.items()
+    ]
+
+
+def placement_figure(
+    rows: list[dict[str, Any]],
+    px: Parameter,
+    py: Parameter,
+    texts: Sequence[Parameter] = (),
+) -> Any:
+    """The placement plot (module doc) of ``rows`` over ``px`` x ``py``, a panel per
+    value of the ``texts`` parameters: a matplotlib Figure (not drawn yet)."""
+    from matplotlib.colors import Normalize
+    from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
 
-    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
-    ax = fig.add_subplot()
-    n_feasible = sum(1 for r in rows if r["feasible"])
-    if good:
-        xs, ys, ts = zip(*good, strict=True)
-        art = ax.scatter(xs, ys, c=ts, cmap="viridis", marker="s", s=_marker_size(cells), zorder=2)
-        fig.colorbar(art, ax=ax, label="cycle time (s)")
-        i = min(range(len(ts)), key=lambda k: ts[k])
-        ax.scatter(
-            [xs[i]],
-            [ys[i]],
-            marker="*",
-            s=220,
-            c="white",
-            edgecolors="black",
-            zorder=3,
-            label=f"best: {ts[i]:.2f} s",
-        )
-    if bad:
-        bx, by, _ = zip(*bad, strict=True)
-        ax.scatter(bx, by, marker="x", c="tab:red", s=40, zorder=2, label="infeasible")
-    ax.set_xlabel(f"{px.name} ({px.unit})")
-    ax.set_ylabel(f"{py.name} ({py.unit})")
-    ax.set_title(f"cycle time over the placement: {n_feasible} of {len(rows)} feasible")
-    ax.set_aspect("equal" if px.unit == py.unit else "auto", adjustable="datalim")
-    ax.grid(True, alpha=0.3, zorder=0)
-    ax.xaxis.set_major_locator(MaxNLocator(6))
-    ax.yaxis.set_major_locator(MaxNLocator(6))
-    if good or bad:
-        ax.legend(
-            loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8, frameon=False
-        )
-    return _save(fig, path)
+    panels = _panels(rows, texts)
+    cols = min(3, len(panels))
+    nrows = math.ceil(len(panels) / cols)
+    fig = Figure(figsize=(1.2 + 4.6 * cols, 1.2 + 4.2 * nrows), layout="constrained")
+    times = [r["cycle_time_s"] for r in rows if r["feasible"]]
+    norm = Normalize(min(times), max(times)) if times else None
+    best = min(times) if times else None
+    art = None
+    axes = [fig.add_subplot(nrows, cols, k + 1) for k in range(len(panels))]
+    for ax, (title, group) in zip(axes, panels, strict=True):
+        cells: dict[tuple[float, float], list[dict[str, Any]]] = {}
+        for r in group:
+            cells.setdefault((r[px.name], r[py.name]), []).append(r)
+        good, bad = [], []
+        for (x, y), members in cells.items():
+            ok = [r["cycle_time_s"] for r in members if r["feasible"]]
+            if ok:
+                good.append((x, y, min(ok)))
+            if len(ok) < len(members):
+                bad.append((x, y))
+        size = _marker_size(cells) / cols
+        if good:
+            xs, ys, ts = zip(*good, strict=True)
+            art = ax.scatter(xs, ys, c=ts, cmap="viridis", norm=norm, marker="s", s=size, zorder=2)
+            if best in ts:
+                i = ts.index(best)
+                ax.scatter(
+                    [xs[i]], [ys[i]], marker="*", s=220, c="white", edgecolors="black",
+                    zorder=4, label=f"best: {best:.2f} s",
+                )  # fmt: skip
+        if bad:
+            bx, by = zip(*bad, strict=True)
+            ax.scatter(bx, by, marker="x", c="tab:red", s=40, zorder=3, label="infeasible")
+        n_ok = sum(1 for r in group if r["feasible"])
+        head = f"{title}: " if title else "cycle time over the placement: "
+        ax.set_title(f"{head}{n_ok} of {len(group)} feasible", fontsize=10 if title else 12)
+        ax.set_xlabel(f"{px.name} ({px.unit})")
+        ax.set_ylabel(f"{py.name} ({py.unit})")
+        ax.set_aspect("equal" if px.unit == py.unit else "auto", adjustable="datalim")
+        ax.grid(True, alpha=0.3, zorder=0)
+        ax.xaxis.set_major_locator(MaxNLocator(6))
+        ax.yaxis.set_major_locator(MaxNLocator(6))
+        if good or bad:
+            ax.legend(
+                loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, fontsize=8,
+                frameon=False,
+            )  # fmt: skip
+    if art is not None:
+        fig.colorbar(art, ax=axes, label="cycle time (s)")
+    if texts:
+        n_ok = sum(1 for r in rows if r["feasible"])
+        fig.suptitle(f"cycle time over the placement: {n_ok} of {len(rows)} feasible")
+    return fig
+
+
+def _xy_plot(
+    rows: list[dict[str, Any]],
+    px: Parameter,
+    py: Parameter,
+    path: Path,
+    texts: Sequence[Parameter] = (),
+) -> Path:
+    return _save(placement_figure(rows, px, py, texts), path)
 
 
 def _marker_size(cells: dict[tuple[float, float], Any]) -> float:
@@ -123,10 +171,14 @@ def _histogram(rows: list[dict[str, Any]], path: Path) -> Path:
 
 
 def plot_study(table: pa.Table, parameters: Sequence[Parameter], out: Path) -> dict[str, Path]:
-    """Write the study's PNGs (module doc) into ``out``; returns name -> path."""
+    """Write the study's PNGs (module doc) into ``out``; returns name -> path (no
+    ``histogram`` when no candidate is feasible)."""
     rows = table.to_pylist()
-    files = {"histogram": _histogram(rows, out / HIST_PNG)}
+    files = {}
+    if any(r["feasible"] for r in rows):
+        files["histogram"] = _histogram(rows, out / HIST_PNG)
     axes = placement_axes(parameters)
-    if axes is not None:
-        files["placement"] = _xy_plot(rows, axes[0], axes[1], out / XY_PNG)
+    if axes is not None and rows:
+        texts = [p for p in parameters if p.text]
+        files["placement"] = _xy_plot(rows, axes[0], axes[1], out / XY_PNG, texts)
     return files

@@ -8,7 +8,10 @@ single-threaded process that imports the simulator once (~1-2 s, once per proces
 later workers (after a crash, in the next study) are ready in milliseconds too; ``spawn``
 where neither exists. Workers get the parent's current environment (a fork server's
 would be that of when it started), run with one thread for numpy's and OpenMP's pools
-and ignore SIGINT (Ctrl-C is the parent's to handle). Each receives the study's setup
+and ignore SIGINT (Ctrl-C is the parent's to handle); a worker ends when the study's
+process dies, however it dies (kill -9 included; :func:`workcell.native.die_with_parent`:
+the kernel's parent-death signal when the study forked it on Linux, else a thread that
+watches the study's process every second). Each receives the study's setup
 once, compiles the cell, then evaluates batches of candidates, sending each row back as
 soon as it is done. The parent hands a batch to each idle worker and waits on every worker's
 pipe and process at once.
@@ -38,6 +41,7 @@ from multiprocessing.connection import Connection, wait
 from typing import Any
 
 from workcell.errors import StudyError
+from workcell.native import die_with_parent
 
 __all__ = ["CRASH_MESSAGE", "ProcessPool", "peak_rss_mb", "stop_fork_server"]
 
@@ -53,11 +57,13 @@ def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _worker(conn: Connection, setup_bytes: bytes, environ: dict[str, str]) -> None:
+def _worker(conn: Connection, setup_bytes: bytes, environ: dict[str, str], parent: int) -> None:
     """A worker's life: set up, then evaluate batches until told to stop (module doc).
 
     ``environ``: the parent's environment when it started the worker (a fork server's
-    children would otherwise see the environment of when the fork server started)."""
+    children would otherwise see the environment of when the fork server started);
+    ``parent``: the study's process id (the worker ends when it dies)."""
+    die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     os.environ.clear()
     os.environ.update(environ)
@@ -168,7 +174,9 @@ class ProcessPool:
         parent, child = self._ctx.Pipe(duplex=True)
         with _single_threaded():
             env = dict(os.environ)
-            p = self._ctx.Process(target=_worker, args=(child, self.setup_bytes, env), daemon=True)
+            p = self._ctx.Process(
+                target=_worker, args=(child, self.setup_bytes, env, os.getpid()), daemon=True
+            )
             p.start()
         child.close()
         return _Worker(p, parent)

@@ -20,6 +20,7 @@ from typing import Any
 from workcell import limits
 from workcell.cell.workcell import Workcell
 from workcell.errors import StudyError, WorkcellError
+from workcell.files import read_bytes
 from workcell.study.evaluation import Setup
 from workcell.study.program import Program, ScriptProgram, program_of
 from workcell.study.spec import PART_FIELDS, ROBOT_FIELDS, Parameter, Study
@@ -56,7 +57,7 @@ def _cell_of(study: Study, program: Program) -> tuple[Workcell, dict[str, Any]]:
         loaded = Workcell.load(path)
     except WorkcellError as exc:
         raise StudyError(str(exc)) from exc
-    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    digest = hashlib.sha256(read_bytes(path, what="cell file", error=StudyError)).hexdigest()
     return loaded, {"file": str(path), "sha256": digest}
 
 

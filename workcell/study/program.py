@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from workcell.errors import StudyError, WorkcellError
+from workcell.files import read_text
 
 if TYPE_CHECKING:
     from workcell.cell.workcell import Workcell
@@ -96,10 +97,7 @@ class ScriptProgram(Program):
         p = Path(path)
         if p.suffix != ".wcl":
             raise StudyError(f"a study's program file is a .wcl script, got '{p}'")
-        try:
-            text = p.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise StudyError(f"cannot read program '{p}': {exc}") from exc
+        text = read_text(p, what="program", error=StudyError)
         check_script(text, str(p))
         prog = cls(str(p), text, str(p.parent.resolve()))
         lines = list(enumerate(text.splitlines(), 1))

@@ -20,6 +20,8 @@ result columns of :mod:`workcell.study.evaluation`.
 from __future__ import annotations
 
 import json
+import os
+import stat
 import time
 import uuid
 from collections.abc import Iterable, Sequence
@@ -31,7 +33,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from workcell.errors import StudyError
-from workcell.files import atomic_path, atomic_write_text
+from workcell.files import atomic_path, atomic_write_text, read_text
 from workcell.study.evaluation import RESULT_COLUMNS
 from workcell.study.spec import Parameter
 
@@ -90,6 +92,7 @@ class ResultStore:
             self.finished.update(t.column("candidate").to_pylist())
 
     def _open(self, out: Path, info: dict[str, Any], key: str) -> None:
+        _own_folder(out / PARTS)
         try:
             (out / PARTS).mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -97,8 +100,8 @@ class ResultStore:
         study = out / STUDY_FILE
         if study.exists():
             try:
-                old = json.loads(study.read_text(encoding="utf-8"))
-            except (OSError, ValueError) as exc:
+                old = json.loads(read_text(study, what="study file", error=StudyError))
+            except (StudyError, ValueError) as exc:
                 raise StudyError(f"'{study}' is damaged ({exc}); use another folder") from exc
             if old.get("key") != key:
                 differ = sorted(k for k in info if old.get("study", {}).get(k) != info[k])
@@ -114,6 +117,8 @@ class ResultStore:
         files = [out / RESULTS] if (out / RESULTS).exists() else []
         self._parts = sorted((out / PARTS).glob("part-*.parquet"))
         for f in files + self._parts:
+            if not stat.S_ISREG(os.lstat(f).st_mode):  # a FIFO would block the reader
+                raise StudyError(f"'{f}' is not a regular file; remove it or use another folder")
             try:
                 t = pq.read_table(f)
             except (OSError, pa.ArrowException) as exc:
@@ -172,10 +177,29 @@ class ResultStore:
             return table
         with atomic_path(self.out / RESULTS, suffix=".parquet") as tmp:
             pq.write_table(table, tmp)
+        _own_folder(self.out / PARTS)  # still the study's own folder, not a link elsewhere
         for p in self._parts:
             p.unlink(missing_ok=True)
         self._parts = []
         return table
+
+
+def _own_folder(parts: Path) -> None:
+    """StudyError unless ``parts`` is missing or a real folder: a symbolic link there
+    would make the study read, and delete, files of another folder."""
+    try:
+        st = os.lstat(parts)
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise StudyError(f"cannot use '{parts}': {exc.strerror or exc}") from exc
+    if stat.S_ISLNK(st.st_mode) or not stat.S_ISDIR(st.st_mode):
+        what = "a symbolic link" if stat.S_ISLNK(st.st_mode) else "not a folder"
+        raise StudyError(
+            f"'{parts}' is {what}: a study keeps its part files in a folder of its own and "
+            "deletes them once merged, so it reads and deletes nothing through it; remove "
+            "it or use another --out folder"
+        )
 
 
 def best_rows(table: pa.Table, n: int) -> list[dict[str, Any]]:

@@ -28,6 +28,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from workcell import limits
 from workcell.checks import is_finite_number
 from workcell.errors import StudyError
 
@@ -60,7 +61,6 @@ FIELDS_HELP = (
     f"parts: {', '.join(f'PART.{f}' for f in PART_FIELDS)}"
 )
 VALUES_HELP = "LO:HI:N (N values from LO to HI), LO:HI (a range, with --sample) or A,B,C (a list)"
-MAX_GRID = 1_000_000  # candidates in a full grid; past that, sample
 
 
 def _nice(v: float) -> float:
@@ -260,6 +260,8 @@ class Study:
             isinstance(self.sample, bool) or not isinstance(self.sample, int) or self.sample < 1
         ):
             raise StudyError(f"sample must be an integer >= 1, got {self.sample!r}")
+        if self.sample is not None:  # before anything is drawn (50 M: a MemoryError)
+            limits.check("max_candidates", self.sample, f"a study of sample={self.sample}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int):
             raise StudyError(f"seed must be an integer, got {self.seed!r}")
         if self.sample is None:
@@ -270,11 +272,9 @@ class Study:
                     "or draw random candidates with sample=N (--sample N)"
                 )
             size = math.prod(len(p.values) for p in params)
-            if size > MAX_GRID:
-                raise StudyError(
-                    f"the full grid has {size} candidates (more than {MAX_GRID}); "
-                    "draw a random sample instead (--sample N)"
-                )
+            limits.check(
+                "max_candidates", size, "the full grid of the study (or draw a sample: --sample N)"
+            )
         if self.dt is not None and not (is_finite_number(self.dt) and self.dt > 0):
             raise StudyError(f"dt must be a number of seconds > 0, got {self.dt!r}")
         if not (is_finite_number(self.clearance_cutoff) and self.clearance_cutoff > 0):

@@ -16,7 +16,9 @@ Top-level imports stay light (``workcell --help`` imports this module).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -112,8 +114,63 @@ def _view(args: argparse.Namespace) -> int:
         viewer.close()
 
 
+@contextlib.contextmanager
+def _around_shell(args: argparse.Namespace, session: Any) -> Iterator[None]:
+    """``shell --view``: the live view of the shell's session while the shell runs."""
+    if not args.view:
+        yield
+        return
+    with viewer_of(args, session.sim, "view_") as viewer:
+        viewer.follow(session)
+        yield
+
+
+class _Serving:
+    """``serve --view``: the page shows the session that ran a command last (read-only
+    unless --view-control)."""
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        self.viewer = viewer_of(args, None, "view_", announce=False,
+                                control=args.view_control, root=args.root)  # fmt: skip
+
+    def sessions(self, make: Callable[[], Any]) -> Callable[[], Any]:
+        def followed() -> Any:
+            session = make()
+            self.viewer.follow(session)
+            return session
+
+        return followed
+
+    def started(self) -> None:
+        announce_url(self.viewer)
+
+    def close(self) -> None:
+        self.viewer.close()
+
+
+def _serving(args: argparse.Namespace) -> _Serving | None:
+    return _Serving(args) if args.view else None
+
+
+def _add_view_flag(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--view", action="store_true",
+                   help="also show the session live in a web page (prints its URL)")  # fmt: skip
+    add_view_options(p, "view-")
+
+
 def register(sub: Any) -> None:
-    """Add ``view`` to the argparse subparsers ``sub``."""
+    """Add ``view`` to the argparse subparsers ``sub``, and ``--view`` to ``shell`` and
+    ``serve`` (registered before, by :mod:`workcell.program.cli`)."""
+    shell, serve = sub.choices.get("shell"), sub.choices.get("serve")
+    if shell is not None:
+        _add_view_flag(shell)
+        shell.set_defaults(around_session=_around_shell)
+    if serve is not None:
+        _add_view_flag(serve)
+        serve.add_argument("--view-control", action="store_true",
+                           help="with --view: the page may jog, teach and run (default: watch "
+                           "only)")  # fmt: skip
+        serve.set_defaults(serving=_serving)
     p = sub.add_parser(
         "view",
         help="the live view of a cell in a web page (jog, teach, run, watch), or a "
