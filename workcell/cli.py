@@ -26,6 +26,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "workcell.robots.cli",
     "workcell.study.cli",
     "workcell.program.progcli",
+    "workcell.view.cli",
 )
 
 

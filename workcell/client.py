@@ -200,6 +200,10 @@ class Client:
         ``zone`` (m): blend into the next move; ``plan``: along a collision-free path."""
         self.call("move_joints_absolute", robot=robot, q=_list(q), zone=zone, plan=plan)
 
+    def jog(self, robot: str, q: ArrayLike) -> None:
+        """Set the joints to ``q`` (rad/m) at once: no simulated time passes."""
+        self.call("jog", robot=robot, q=_list(q))
+
     def move_joints_relative(self, robot: str, dq: ArrayLike, *, zone: float = 0.0) -> None:
         """Move the joints by ``dq`` (rad/m); ``zone`` (m): blend into the next move."""
         self.call("move_joints_relative", robot=robot, dq=_list(dq), zone=zone)

@@ -25,6 +25,7 @@ __all__ = [
     "SignalTimeout",
     "StudyError",
     "UnreachableError",
+    "ViewError",
     "WorkcellError",
 ]
 
@@ -110,3 +111,8 @@ class SignalTimeout(ProgramError):  # noqa: N818 - the contract's name (DESIGN.m
 class DeadlockError(ProgramError):
     """Programs run together (``run_programs``) all wait for signals that nothing can
     change any more (the message names each program and what it waits for)."""
+
+
+class ViewError(WorkcellError):
+    """The live view could not start or do what its page asked (a port in use, a file
+    name outside the working folder)."""

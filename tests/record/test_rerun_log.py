@@ -20,6 +20,7 @@ from workcell import solids
 from workcell.cell import Workcell
 from workcell.examples import thesis_joints
 from workcell.record import RecordError, record, rerun_log
+from workcell.record.camera import visual_points
 from workcell.sim import Event, Simulator, Timeline
 from workcell.spatial import rot_z, translation
 
@@ -524,3 +525,45 @@ def test_kept_frames_by_hand() -> None:
     assert np.flatnonzero(keep).tolist() == [0, 4, 5, 7, 10]
     assert rerun_log.kept_frames(t, None).all()
     assert rerun_log.kept_frames(t, 1000.0).all()
+
+
+def _blueprint_column(path: Path, suffix: str) -> list:
+    reader = RrdReader(path)
+    (bp,) = reader.blueprints()
+    for chunk in reader.store(store=bp).stream().to_chunks():
+        rb = chunk.to_record_batch()
+        for name in rb.schema.names:
+            if name.endswith(suffix):
+                return rb.column(name).flatten().flatten().to_pylist()
+    raise AssertionError(f"no {suffix} in the blueprint")
+
+
+def test_blueprint_frames_the_cell(cell_rec: tuple[Simulator, Path]) -> None:
+    """The 3D view opens on the cell: every visual point of the first and last frames lies
+    inside a 4:3 picture with MuJoCo's field of view (45 deg vertical) from the stored eye
+    towards the stored look-at point."""
+    sim, path = cell_rec
+    eye = np.array(_blueprint_column(path, "EyeControls3D:position"), dtype=float)
+    look = np.array(_blueprint_column(path, "EyeControls3D:look_target"), dtype=float)
+    axis = (look - eye) / np.linalg.norm(look - eye)
+    d = mujoco.MjData(sim.model)
+    for i in (0, -1):
+        d.qpos[:] = sim.timeline.frame(i)[2]
+        mujoco.mj_kinematics(sim.model, d)
+        P = visual_points(sim.model, d) - eye
+        right = np.cross(axis, [0.0, 0.0, 1.0])
+        right /= np.linalg.norm(right)
+        up = np.cross(right, axis)
+        depth = P @ axis
+        tv = math.tan(math.radians(sim.model.vis.global_.fovy) / 2)
+        assert np.all(depth > 0)
+        assert np.abs(P @ up / depth).max() < tv  # in a 640 x 480 picture of that camera
+        assert np.abs(P @ right / depth).max() < tv * 4 / 3
+
+
+def test_gripper_series_is_a_step(cell_rec: tuple[Simulator, Path]) -> None:
+    """Points that share a pixel are drawn as their min and max, not averaged: a 0/1
+    gripper signal stays a step when zoomed out (rerun's aggregation policy MinMax)."""
+    _, path = cell_rec
+    policy = read_static(path, "/gripper/arm", "SeriesLines:aggregation_policy")
+    assert int(policy[0]) == int(rr.components.AggregationPolicy.MinMax.value)

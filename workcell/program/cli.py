@@ -41,7 +41,14 @@ def _start(args: argparse.Namespace) -> Any:
 def _shell(args: argparse.Namespace) -> int:
     from workcell.program.shell import run_shell
 
-    return run_shell(_start(args)(), history=args.history, echo=args.echo)
+    session = _start(args)()
+    # another package's part around the session (workcell.view adds --view): a context
+    # manager factory set as a parser default, so this package imports nothing above it
+    around = getattr(args, "around_session", None)
+    if around is None:
+        return run_shell(session, history=args.history, echo=args.echo)
+    with around(args, session):
+        return run_shell(session, history=args.history, echo=args.echo)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -162,6 +169,12 @@ def _serve(args: argparse.Namespace) -> int:
         print(warning, file=sys.stderr, flush=True)
     make = _start(args)
     make()  # a bad --cell or --mode fails here, not at each client's connection
+    # another package's part in the server (workcell.view adds --view), set as a parser
+    # default: .sessions(make) -> make, .started(), .close()
+    extra = getattr(args, "serving", None)
+    part = extra(args) if extra is not None else None
+    if part is not None:
+        make = part.sessions(make)
     server = Server(
         args.host,
         args.port,
@@ -180,12 +193,16 @@ def _serve(args: argparse.Namespace) -> int:
         f"files in {server.root}); Ctrl-C stops",
         flush=True,
     )
+    if part is not None:
+        part.started()
     try:
         server.serve_forever()
     except KeyboardInterrupt:
         pass
     finally:
         server.server_close()
+        if part is not None:
+            part.close()
     return 0
 
 

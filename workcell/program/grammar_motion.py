@@ -28,6 +28,7 @@ from workcell.program.targets import Target
 from workcell.sim.profiles import PROFILES
 
 __all__ = [
+    "JOG",
     "MOVE",
     "OVERRIDE",
     "POSE_SYNTAX",
@@ -146,6 +147,15 @@ def robot_leaf(build: Any, syntax: str, summary: str, example: str, *more: Node)
     """A command that starts with a robot's name, then ``more``, then its leaf."""
     return Seq(ROBOT, *more, Leaf(build, syntax, summary, example))
 
+
+JOG = robot_leaf(
+    lambda v: simc.Jog(v["robot"], v["q"]),
+    "jog ROBOT J1 .. Jn [deg|rad]",
+    "set the joints at once (deg, or m for a prismatic joint): no simulated time passes, "
+    "as with a teach pendant",
+    "jog puma 10 0 -90 0 90 0",
+    _JOINTS,
+)
 
 MOVE = Keys(
     {

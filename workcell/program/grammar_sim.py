@@ -20,7 +20,7 @@ from workcell.program import grammar_logic
 from workcell.program import progcommands as progc
 from workcell.program import simcommands as simc
 from workcell.program.grammar_cell import ADD, CELL
-from workcell.program.grammar_motion import MOVE, OVERRIDE, PROFILE, SPEED, robot_leaf
+from workcell.program.grammar_motion import JOG, MOVE, OVERRIDE, PROFILE, SPEED, robot_leaf
 from workcell.program.grammar_tasks import CLOSE, HANDOVER, OPEN, PICK, PLACE, PLANNING
 from workcell.program.keytree import Keys, Leaf, Node, Options, Seq, Set
 from workcell.program.params import Choice, Name, Number, Text
@@ -115,6 +115,7 @@ BRANCHES: dict[str, Node] = {
     "pick": PICK,
     "place": PLACE,
     "handover": HANDOVER,
+    "jog": JOG,
     "export": _EXPORT,
     "wait": Seq(
         Number("seconds", "time", what="seconds"),

@@ -80,6 +80,18 @@ class MoveJointsAbsolute(Command, wire="move_joints_absolute"):
 
 
 @dataclass(frozen=True)
+class Jog(Command, wire="jog"):
+    """Set a robot's joints to ``q`` (rad/m) at once: no simulated time passes (one frame,
+    a ``jog`` event), as a teach pendant or the live view's inputs do."""
+
+    robot: str = arg(a.name)
+    q: tuple[float, ...] = arg(a.vector, doc="rad/m")
+
+    def execute(self, session: Session) -> None:
+        call_sim(session, "jog", self.robot, np.array(self.q))
+
+
+@dataclass(frozen=True)
 class MoveJointsRelative(Command, wire="move_joints_relative"):
     """Move a robot's joints by ``dq`` (rad/m); ``zone`` (m): blend into the next move."""
 

@@ -36,6 +36,7 @@ from workcell.program.logiccommands import (
     WaitSignal,
 )
 from workcell.program.motioncommands import (
+    Jog,
     MoveCircular,
     MoveEndEffector,
     MoveJointsAbsolute,
@@ -102,6 +103,7 @@ __all__ = [
     "GripperPose",
     "Handover",
     "Held",
+    "Jog",
     "Joints",
     "MoveCircular",
     "MoveEndEffector",

@@ -34,7 +34,15 @@ from workcell.cell.compile_devices import is_parked
 from workcell.errors import ModelError
 from workcell.meshgeoms import COLLISION_GROUP
 
-__all__ = ["AZIMUTH_STEP", "VIEWS", "named_view", "occlusion", "overview_camera", "visual_points"]
+__all__ = [
+    "AZIMUTH_STEP",
+    "VIEWS",
+    "camera_eye",
+    "named_view",
+    "occlusion",
+    "overview_camera",
+    "visual_points",
+]
 
 AZIMUTH_STEP = 30.0  # deg between the azimuths tried
 _MOVABLE_WEIGHT = 10.0  # a hidden movable part costs as much as ten static ones
@@ -225,3 +233,12 @@ def named_view(
         )
     configs = None if qpos is None else qpos()
     return overview_camera(model, configs, width=width, height=height, **view)
+
+
+def camera_eye(cam: mujoco.MjvCamera) -> tuple[Array, Array]:
+    """A free camera's eye point and look-at point (m, world): the eye sits ``distance``
+    behind the look-at point along the viewing direction given by azimuth and elevation."""
+    az, el = math.radians(cam.azimuth), math.radians(cam.elevation)
+    forward = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    look = np.array(cam.lookat, dtype=np.float64)
+    return look - cam.distance * forward, look

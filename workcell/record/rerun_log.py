@@ -67,12 +67,13 @@ import mujoco
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from tqdm import tqdm
 
 from workcell.cli_common import check_recording_path
 from workcell.errors import RecordError
 from workcell.files import atomic_path
+from workcell.record.camera import camera_eye, overview_camera
 from workcell.record.rr_devices import PROGRAMS, RESULTS, SIGNALS, has_logic, log_devices
 from workcell.record.rr_frames import Frames, log_events
 from workcell.record.rr_rates import Rates, acceleration_entity, speed_entity
@@ -141,21 +142,42 @@ def _check_fps(fps: object) -> None:
 
 
 # ---------------------------------------------------------------------- public
+def _overview_eye(sim: Simulator) -> tuple[Array, Array]:
+    """Eye and look-at points (m) of the overview camera over the run's first and last
+    frames (the camera of the project's pictures: the whole cell in view)."""
+    qs = [sim.timeline.frame(0)[2], sim.timeline.frame(-1)[2]]
+    return camera_eye(overview_camera(sim.model, qs))
+
+
 def default_blueprint(
-    robots: Sequence[str], *, grippers: bool = True, logic: bool = False
+    robots: Sequence[str],
+    *,
+    grippers: bool = True,
+    logic: bool = False,
+    eye: tuple[ArrayLike, ArrayLike] | None = None,
 ) -> rrb.Blueprint:
-    """The default layout: the 3D cell (tool paths drawn up to the cursor) beside, per
-    robot, tabs of its joint angles, speeds and accelerations, the gripper states (with
-    ``grippers``), with ``logic`` tabs of the signals, the programs' activity, the Gantt
-    chart and the throughput (:mod:`workcell.record.rr_devices`), and the event log; the
-    time panel on ``sim_time``."""
+    """The default layout: the 3D cell (tool paths drawn up to the cursor; seen from
+    ``eye`` = (eye point, look-at point), m, when given: :func:`record` gives the overview
+    camera's, which frames the whole cell) beside, per robot, tabs of its joint angles,
+    speeds and accelerations, the gripper states (with ``grippers``), with ``logic`` tabs
+    of the signals, the programs' activity, the Gantt chart and the throughput
+    (:mod:`workcell.record.rr_devices`), and the event log; the time panel on
+    ``sim_time``."""
     trail = rrb.VisibleTimeRanges(
         timeline="sim_time",
         start=rrb.TimeRangeBoundary.infinite(),
         end=rrb.TimeRangeBoundary.cursor_relative(),
     )
+    controls = None
+    if eye is not None:
+        controls = rrb.EyeControls3D(
+            kind=rrb.Eye3DKind.Orbital, position=eye[0], look_target=eye[1], eye_up=(0, 0, 1)
+        )
     view3d = rrb.Spatial3DView(
-        origin=WORLD, name="Workcell", overrides={tool_path_entity(r): trail for r in robots}
+        origin=WORLD,
+        name="Workcell",
+        overrides={tool_path_entity(r): trail for r in robots},
+        eye_controls=controls,
     )
     plots = [
         rrb.Tabs(
@@ -327,7 +349,10 @@ def record(
         rec.set_log_time_enabled(False)
         try:
             bp = default_blueprint(
-                sim.robots, grippers=bool(sim.compiled.gripper_bodies), logic=has_logic(sim)
+                sim.robots,
+                grippers=bool(sim.compiled.gripper_bodies),
+                logic=has_logic(sim),
+                eye=_overview_eye(sim),
             )
             sinks: list[rr.FileSink | rr.GrpcSink] = [rr.FileSink(tmp)] if tmp is not None else []
             sinks += [rr.GrpcSink(_spawn_viewer(port))] if spawn else []

@@ -216,4 +216,6 @@ def log_static(rec: rr.RecordingStream, sim: Simulator, layout: Layout, d: mujoc
     for ent, _, _, labels in layout.joints:
         rec.log(ent, rr.SeriesLines(names=labels), static=True)
     for robot in layout.grippers:
-        rec.log(gripper_entity(robot), rr.SeriesLines(names=f"{robot} closed"), static=True)
+        # no averaging of the points that share a pixel: a 0/1 step stays a step when zoomed out
+        step = rr.SeriesLines(names=f"{robot} closed", aggregation_policy="minmax")
+        rec.log(gripper_entity(robot), step, static=True)

@@ -22,6 +22,16 @@ undone: what the others did stays, and so does what it did before it failed.
 
 Devices (:mod:`workcell.sim.devices`): in a cell with belts, sensors, sources or sinks,
 every frame is computed (playback mode too) and the devices are evaluated on it.
+
+Listeners (``Simulator.frame_listeners``): callables ``f(frame, t)`` called each time
+``sim.data`` shows a frame: after each applied frame (its kinematics, carried parts and
+contacts done; ``frame`` is the timeline index it has or is about to get, ``t`` its
+simulated time (s)), for each replayed frame, and after an undo or a replay put the last
+frame back. In playback mode without carried parts or collision checks only a
+command's last frame is applied, so only it is announced. Listeners observe (the live
+view, :mod:`workcell.view`); they must not raise or change the simulator, and cost
+nothing when the list is empty. Events have their own listeners
+(``Simulator.event_listeners``, :class:`~workcell.sim.timeline.Timeline`).
 """
 
 from __future__ import annotations
@@ -78,12 +88,15 @@ class FrameRunner:
                             sleep(lag)
                     qpos[:] = row[2:]
                     kin(m, d)
+                    for listener in self.frame_listeners:
+                        listener(i + k, float(row[0]))
                     walls[k] = clock()
                 self.timeline.set_wall_times(i, w0 + (walls - c0))
         finally:
             qpos[:] = final
             kin(m, d)
             self._wall = w0 + (clock() - c0)
+            self._shown()
         return n - start
 
     # ------------------------------------------------------------------ internals
@@ -119,6 +132,8 @@ class FrameRunner:
             walls = np.full(k, clock())
             d.qpos[:] = Q[-1]
             mujoco.mj_kinematics(m, d)
+            for listener in self.frame_listeners:
+                listener(first + k - 1, float(times[-1]))
         else:
             walls = np.empty(k)
             qpos, kin, collide, mul = (
@@ -132,6 +147,7 @@ class FrameRunner:
             movers = logic is not None and logic.movers
             if logic is not None:
                 logic.stop = False
+            listeners = self.frame_listeners
             for j in range(k):
                 if movers:  # parts keep the poses the devices gave them
                     logic.carry_over(qpos, Q[j])
@@ -153,6 +169,8 @@ class FrameRunner:
                     if d.ncon or self._touching:
                         pens = self.contacts.penetrations(d)
                         self._contact_events(float(times[j]), pens, mover=mover, frame=first + j)
+                for listener in listeners:
+                    listener(first + j, float(times[j]))
                 walls[j] = clock()
                 if logic is not None and logic.stop:  # a watched signal took its value
                     k = j + 1
@@ -229,4 +247,11 @@ class FrameRunner:
             mujoco.mj_kinematics(self.model, self.data)
             if self._logic is not None:
                 self._logic.rebuild()
+            self._shown()
             raise
+
+    def _shown(self: Simulator) -> None:
+        """Tell the frame listeners that ``data`` shows the timeline's last frame again
+        (after an undo or a replay)."""
+        for listener in self.frame_listeners:
+            listener(len(self.timeline) - 1, self.sim_time)

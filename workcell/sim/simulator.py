@@ -76,6 +76,7 @@ applied undoes the command (:mod:`workcell.sim.frames`).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -101,6 +102,7 @@ from workcell.sim.cycle import command_record
 from workcell.sim.devices import CellLogic
 from workcell.sim.frames import FrameRunner
 from workcell.sim.gripping import GraspRecord, GripperCommands, Hold
+from workcell.sim.jogging import JogCommands
 from workcell.sim.motion import MotionCommands
 from workcell.sim.planned import PlanningCommands
 from workcell.sim.profiles import step_times
@@ -126,6 +128,7 @@ class Simulator(
     PlanningCommands,
     RestingCommands,
     TaskCommands,
+    JogCommands,
     FrameRunner,
     ReadBack,
     SignalCommands,
@@ -233,10 +236,13 @@ class Simulator(
         self._touching: set[tuple[str, str]] = set()
         self.sim_time = 0.0
         self._wall = 0.0
+        # f(frame, t) each time data shows a frame (observers: workcell.sim.frames)
+        self.frame_listeners: list[Callable[[int, float], None]] = []
         self.timeline = Timeline(self.model.nq, memory_limit=memory_limit, spill_dir=spill_dir)
         self._logic = CellLogic.of(self)  # the devices (None: the cell has none)
         if self._logic is not None:
             self._logic.start()
+        self.event_listeners = self.timeline.listeners  # f(event) as each event is recorded
         self.timeline.append(0.0, 0.0, self.data.qpos)
         if self.check_collisions:
             mujoco.mj_collision(m, self.data)

@@ -17,13 +17,14 @@ when replayed (:meth:`Timeline.iter_blocks`).
 
 Events are few (one per command, grasp, collision, ...) and kept as a list of
 :class:`Event`. :meth:`Timeline.mark` and :meth:`Timeline.truncate` let the simulator undo
-a failing command exactly.
+a failing command exactly. ``Timeline.listeners`` are called with each event as it is
+recorded (an event undone later disappears from :attr:`Timeline.events`).
 """
 
 from __future__ import annotations
 
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import IO, Any, NamedTuple
 
 import numpy as np
@@ -127,6 +128,8 @@ class Timeline:
         self._blocks: list[Array | None] = []
         self._n = 0
         self._events: list[Event] = []
+        # called with each event as it is recorded (observers such as the live view)
+        self.listeners: list[Callable[[Event], None]] = []
         self._file: IO[bytes] | None = None
         self._block_bytes = self.chunk * (2 + self.nq) * 8
 
@@ -315,6 +318,8 @@ class Timeline:
             float(t), robot, str(kind), str(detail), self._n - 1 if frame is None else frame, data
         )
         self._events.append(e)
+        for listener in self.listeners:
+            listener(e)
         return e
 
     # ------------------------------------------------------------------ undo
