@@ -24,11 +24,11 @@ in sec or deg/sec, and everything else stop with a ProgramError at their place.
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any
 
-from workcell.robotprog.exprs import ExprParser, Fn, number
+from workcell.robotprog.exprs import Fn, number
+from workcell.robotprog.fanuc_file import positions, ref, sections, statements
 from workcell.robotprog.fanuc_run import (
     BINARY,
     UNARY,
@@ -48,131 +48,29 @@ from workcell.robotprog.fanuc_run import (
     _set_pr_element,
     _set_r,
 )
+from workcell.robotprog.reading import Reader
 from workcell.robotprog.runtime import VM, Code, RobotProgram
-from workcell.robotprog.source import Loc, Parser, Token, error, tokenize
+from workcell.robotprog.source import Loc, Token, error
 
 __all__ = ["read"]
 
-RULES = [
-    ("_ws", r"[ \t\r\f]+"),
-    ("ref2", r"\[\s*\d+\s*,\s*\d+\s*\]"),
-    ("ref", r"\[\s*\d+\s*(?::[^\]\n]*)?\]"),
-    ("num", r"(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?"),
-    ("str", r"'[^'\n]*'|\"[^\"\n]*\""),
-    ("unit", r"mm/sec|cm/min|inch/min|deg/sec|msec|sec"),
-    ("id", r"[A-Za-z_$][A-Za-z0-9_$.]*"),
-    ("op", r"<>|<=|>=|[-+*/()\[\],:=<>%!]"),
-]
-_MN = re.compile(r"^\s*(\d+)\s*:(.*)$")
-_CONT = re.compile(r"^\s*:(.*)$")
-_FIELD = re.compile(r"([XYZWPR]|J\d)\s*=\s*([-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?)")
 
-
-def _ref(t: Token) -> tuple[int, str]:
-    inner = t.text[1:-1]
-    n, _, comment = inner.partition(":")
-    return int(n.strip()), comment.strip().strip('"')
-
-
-def _positions(lines: list[tuple[int, str]], path: str) -> dict[int, Position]:
-    """The /POS section's positions."""
-    out: dict[int, Position] = {}
-    text = "\n".join(s for _, s in lines)
-    for m in re.finditer(r"P\[(\d+)(?::[^\]]*)?\]\s*\{(.*?)\};", text, re.S):
-        n = int(m.group(1))
-        body = m.group(2)
-        line = lines[text[: m.start()].count("\n")][0]
-        loc = Loc(path, line, 1)
-        if "GP2" in body:
-            raise error(loc, "positions of several motion groups are not supported")
-        pos = Position()
-        uf = re.search(r"UF\s*:\s*(\d+)", body)
-        ut = re.search(r"UT\s*:\s*(\d+)", body)
-        pos["uf"] = int(uf.group(1)) if uf else 0
-        pos["ut"] = int(ut.group(1)) if ut else 0
-        conf = re.search(r"CONFIG\s*:\s*'([^']*)'", body)
-        for k, v in _FIELD.findall(body):
-            pos[k] = float(v)
-        if conf:
-            parts = [s.strip() for s in conf.group(1).split(",")]
-            flags = " ".join(parts[0].split())
-            if not re.fullmatch(r"[NF] [UD] [TB]", flags) or len(parts) != 4:
-                raise error(loc, f"CONFIG '{conf.group(1)}' is not 'N|F U|D T|B, t4, t5, t6'")
-            try:
-                pos["config"] = (flags, *(int(x) for x in parts[1:]))
-            except ValueError as exc:
-                raise error(
-                    loc, f"CONFIG '{conf.group(1)}' has a turn number that is not whole"
-                ) from exc
-        cart = all(k in pos for k in "XYZWPR")
-        joint = "J1" in pos
-        if cart == joint:
-            raise error(loc, f"P[{n}] must have X, Y, Z, W, P, R or J1 ... J6")
-        out[n] = pos
-    return out
-
-
-class FanucReader:
+class FanucReader(Reader):
     """Reads one LS program (module doc)."""
 
+    language, binary, unary = "FANUC TP", BINARY, UNARY
+
     def __init__(self, path: str) -> None:
-        self.path = path
-        self.code = Code("MAIN")
+        super().__init__(path)
+        self.code = self.routines["MAIN"] = Code("MAIN")
 
     def read(self, text: str) -> None:
-        sections: dict[str, list[tuple[int, str]]] = {}
-        current = None
-        for i, line in enumerate(text.splitlines(), 1):
-            s = line.strip()
-            if s.startswith("/"):
-                current = s.split()[0].upper()
-                sections.setdefault(current, [])
-                if current not in ("/PROG", "/ATTR", "/APPL", "/MN", "/POS", "/END"):
-                    raise error(Loc(self.path, i, 1), f"unknown section {current}")
-                continue
-            if current is None and s:
-                raise error(Loc(self.path, i, 1), "expected /PROG")
-            if current is not None:
-                sections[current].append((i, line))
-        if "/PROG" not in sections or "/MN" not in sections:
-            raise error(Loc(self.path, 1, 1), "an LS program needs /PROG and /MN")
-        self.positions = _positions(sections.get("/POS", []), self.path)
-        statements: list[list[Token]] = []
-        for i, line in sections["/MN"]:
-            if not line.strip():
-                continue
-            m, c = _MN.match(line), _CONT.match(line)
-            if m is None and c is None:
-                raise error(Loc(self.path, i, 1), "expected a numbered line 'n:  ... ;'")
-            body = (m or c).group(2 if m else 1)  # type: ignore[union-attr]
-            col = line.index(body) + 1
-            stripped = body.rstrip()
-            if (
-                not stripped.endswith(";")
-                and m is not None
-                and not stripped.lstrip().startswith(("C ", "C\t"))
-            ):
-                raise error(
-                    Loc(self.path, i, col + len(stripped)), "expected ';' at the end of the line"
-                )
-            if stripped.endswith(";"):
-                stripped = stripped[:-1]
-            if stripped.lstrip().startswith("!") or stripped.lstrip().startswith("//"):
-                continue
-            toks = tokenize(" " * (col - 1) + stripped, self.path, RULES)[:-1]
-            toks = [Token(t.kind, t.text, Loc(self.path, i, t.loc.col)) for t in toks]
-            if c is not None:
-                if not statements:
-                    raise error(Loc(self.path, i, 1), "a continuation line without a statement")
-                statements[-1].extend(toks)
-            elif toks:
-                statements.append(toks)
+        parts = sections(text, self.path)
+        self.positions = positions(parts.get("/POS", []), self.path)
         self.stack: list[tuple[str, Any]] = []
-        for toks in statements:
+        for toks in statements(parts["/MN"], self.path):
             end = Loc(self.path, toks[-1].loc.line, toks[-1].loc.col + len(toks[-1].text))
-            p = Parser([*toks, Token("eof", "", end)], "FANUC TP")
-            self.p = p
-            self.ex = ExprParser(p, BINARY, UNARY, self.primary)
+            self.parse([*toks, Token("eof", "", end)])
             self.statement()
         if self.stack:
             kind, loc = self.stack[-1]
@@ -189,7 +87,7 @@ class FanucReader:
             p.next()
             if p.at("DI", "RI"):
                 io = p.next()
-                n, name = _ref(p.expect_kind("ref", "an I/O number [n]"))
+                n, name = ref(p.expect_kind("ref", "an I/O number [n]"))
                 p.expect("=")
                 v = p.expect_kind("id", "ON or OFF").upper
                 if v not in ("ON", "OFF"):
@@ -211,7 +109,7 @@ class FanucReader:
                 code.do(t.loc, lambda vm: vm.motion.dwell(secs(vm), "WAIT"))
         elif u in ("DO", "RO"):
             p.next()
-            n, name = _ref(p.expect_kind("ref", "an output number [n]"))
+            n, name = ref(p.expect_kind("ref", "an output number [n]"))
             p.expect("=")
             vt = p.expect_kind("id", "ON or OFF")
             v = vt.upper
@@ -223,13 +121,13 @@ class FanucReader:
             )
         elif u == "LBL":
             p.next()
-            n, _ = _ref(p.expect_kind("ref", "a label number"))
+            n, _ = ref(p.expect_kind("ref", "a label number"))
             self.done()
             code.place(f"LBL{n}", t.loc)
         elif u == "JMP":
             p.next()
             p.expect("LBL")
-            n, _ = _ref(p.expect_kind("ref", "a label number"))
+            n, _ = ref(p.expect_kind("ref", "a label number"))
             self.done()
             code.jump(t.loc, f"LBL{n}")
         elif u == "IF":
@@ -265,7 +163,7 @@ class FanucReader:
             code.do(t.loc, lambda vm: _set_frame_number(vm, key, v(vm)))
         elif u in ("UFRAME", "UTOOL") and p.peek().kind == "ref":
             p.next()
-            n, _ = _ref(p.next())
+            n, _ = ref(p.next())
             p.expect("=")
             src = self.primary()
             self.done()
@@ -305,7 +203,7 @@ class FanucReader:
         value = self.ex.parse()
         self.done()
         if t.upper == "R":
-            n, _ = _ref(r)
+            n, _ = ref(r)
             if r.kind == "ref2":
                 raise error(r.loc, "R[n,i] is not a register")
             self.code.do(t.loc, lambda vm: _set_r(vm, n, number(value(vm), "R[...]")))
@@ -313,7 +211,7 @@ class FanucReader:
             n, i = (int(x) for x in r.text[1:-1].split(","))
             self.code.do(t.loc, lambda vm: _set_pr_element(vm, n, i, value(vm)))
         else:
-            n, _ = _ref(r)
+            n, _ = ref(r)
             self.code.do(t.loc, lambda vm: _set_pr(vm, n, value(vm)))
 
     def if_(self) -> None:
@@ -331,7 +229,7 @@ class FanucReader:
         p.expect(",", "',' and JMP LBL[n]")
         if p.accept("JMP"):
             p.expect("LBL")
-            n, _ = _ref(p.expect_kind("ref", "a label number"))
+            n, _ = ref(p.expect_kind("ref", "a label number"))
             self.done()
             skip = code.new_label()
             code.unless(t.loc, cond, skip)
@@ -347,7 +245,7 @@ class FanucReader:
         p, code = self.p, self.code
         t = p.next()
         p.expect("R")
-        reg, _ = _ref(p.expect_kind("ref", "a register R[n]"))
+        reg, _ = ref(p.expect_kind("ref", "a register R[n]"))
         p.expect("=")
         start = self.ex.parse()
         d = p.next()
@@ -419,7 +317,7 @@ class FanucReader:
         t = p.next()
         if t.upper not in ("P", "PR") or p.tok.kind != "ref":
             raise p.fail("expected P[n] or PR[n]", t)
-        n, _ = _ref(p.next())
+        n, _ = ref(p.next())
         if t.upper == "P":
             if n not in self.positions:
                 raise error(t.loc, f"P[{n}] is not in /POS")
@@ -442,22 +340,22 @@ class FanucReader:
         if u in ("ON", "OFF"):
             return lambda vm: u == "ON"
         if u == "R" and p.tok.kind == "ref":
-            n, _ = _ref(p.next())
+            n, _ = ref(p.next())
             return lambda vm: _r(vm, n)
         if u == "PR" and p.tok.kind == "ref2":
             n, i = (int(x) for x in p.next().text[1:-1].split(","))
             return lambda vm: _pr_element(vm, n, i)
         if u == "PR" and p.tok.kind == "ref":
-            n, _ = _ref(p.next())
+            n, _ = ref(p.next())
             return lambda vm: _pr(vm, n)
         if u == "P" and p.tok.kind == "ref":
-            n, _ = _ref(p.next())
+            n, _ = ref(p.next())
             if n not in self.positions:
                 raise error(t.loc, f"P[{n}] is not in /POS")
             pos = self.positions[n]
             return lambda vm: Position(pos)
         if u in ("DI", "RI", "DO", "RO") and p.tok.kind == "ref":
-            n, name = _ref(p.next())
+            n, name = ref(p.next())
             return lambda vm: _io(vm, u, n, name)
         if u in ("LPOS", "JPOS"):
             return lambda vm: _current(vm, u)
@@ -468,5 +366,4 @@ def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotPr
     """Read an LS program as a :class:`RobotProgram`."""
     r = FanucReader(str(path))
     r.read(path.read_text(encoding="utf-8", errors="replace"))
-    routine = r.code.finish()
-    return RobotProgram(str(path), "fanuc_ls", {"MAIN": routine}, "MAIN", [], inputs, outputs)
+    return r.program("fanuc_ls", "MAIN", [], inputs, outputs)

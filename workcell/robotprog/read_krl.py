@@ -30,8 +30,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from workcell.errors import ProgramError
-from workcell.robotprog.exprs import ExprParser, Fn, boolean, number
+from workcell.robotprog.exprs import Fn
+from workcell.robotprog.krl_data import KrlData
 from workcell.robotprog.krl_exprs import KrlExpressions
 from workcell.robotprog.krl_run import (
     BINARY,
@@ -39,18 +39,13 @@ from workcell.robotprog.krl_run import (
     DEF_VEL_CP,
     UNARY,
     _bas,
-    _convert,
-    _index,
     _io_name,
     _move,
     _wait_for,
 )
-from workcell.robotprog.kuka_values import (
-    SIMPLE_TYPES,
-    STRUCT_TYPES,
-)
-from workcell.robotprog.runtime import VM, Code, RobotProgram, check_calls
-from workcell.robotprog.source import Loc, Parser, error, tokenize
+from workcell.robotprog.reading import Reader, variable_loop, while_loop
+from workcell.robotprog.runtime import VM, Code, RobotProgram
+from workcell.robotprog.source import NUMBER, Loc, error, tokenize
 
 __all__ = ["read"]
 
@@ -60,7 +55,7 @@ RULES = [
     ("_attr", r"&[^\n]*"),
     ("nl", r"\n"),
     ("bits", r"'[BbHh][0-9A-Fa-f]+'"),
-    ("num", r"(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?"),
+    ("num", NUMBER),
     ("str", r'"[^"\n]*"'),
     ("sys", r"\$[A-Za-z_][A-Za-z0-9_]*"),
     ("enum", r"#[A-Za-z_][A-Za-z0-9_]*"),
@@ -78,23 +73,21 @@ def _setup(vm: VM) -> None:
     )  # fmt: skip
 
 
-class KrlReader(KrlExpressions):
+class KrlReader(KrlData, KrlExpressions, Reader):
     """Reads one KRL program (module doc)."""
 
+    language, binary, unary = "KRL", BINARY, UNARY
+
     def __init__(self, path: str) -> None:
-        self.path = path
+        super().__init__(path)
         self.types: dict[str, str] = {}
         self.signals: dict[str, tuple[str, int]] = {}
         self.setup: list[Any] = [_setup]
-        self.routines: dict[str, Code] = {}
-        self.main: str | None = None
 
     # ------------------------------------------------------------------ files
     def read_file(self, path: Path) -> None:
         text = path.read_text(encoding="utf-8", errors="replace")
-        p = Parser(tokenize(text, str(path), RULES), "KRL")
-        self.p = p
-        self.ex = ExprParser(p, BINARY, UNARY, self.primary)
+        p = self.parse(tokenize(text, str(path), RULES))
         p.skip_nl()
         while p.tok.kind != "eof":
             if p.accept("GLOBAL"):
@@ -109,56 +102,21 @@ class KrlReader(KrlExpressions):
                 raise p.fail("expected DEF, DEFDAT or the end of the file")
             p.skip_nl()
 
-    def data(self) -> None:
-        p = self.p
-        p.next()
-        p.expect_kind("id", "the data list's name")
-        p.accept("PUBLIC")
-        p.end_line()
-        code = Code("#DAT")
-        while not p.at("ENDDAT"):
-            if p.tok.kind == "eof":
-                raise p.fail("expected ENDDAT")
-            if not self.declaration(code):
-                raise p.fail("a data list holds declarations only")
-        p.next()
-        p.end_line()
-        routine = code.finish()
-
-        def run_data(vm: VM, routine: Any = routine) -> None:
-            vm.program.routines["#DAT"] = routine
-            vm.call("#DAT", routine.ops[0].loc if routine.ops else Loc(self.path, 1, 1), 0)
-
-        self.setup.append(run_data)
-
     def routine(self) -> None:
         p = self.p
         p.next()
         name_tok = p.expect_kind("id", "the routine's name")
-        name = name_tok.upper
-        if name in self.routines:
-            raise error(name_tok.loc, f"routine {name_tok.text} is defined twice")
+        code = self.define(name_tok, name_tok.upper, "routine")
         p.expect("(")
         if not p.at(")"):
             raise p.unsupported("a routine with parameters")
         p.next()
         p.end_line()
-        code = Code(name)
-        self.routines[name] = code
-        if self.main is None:
-            self.main = name
         self.block(code, {"END"}, None)
         p.next()
         p.end_line()
 
     # ------------------------------------------------------------------ statements
-    def block(self, code: Code, until: set[str], exit_label: str | None) -> None:
-        p = self.p
-        while not (p.tok.kind in ("id",) and p.tok.upper in until):
-            if p.tok.kind == "eof":
-                raise p.fail(f"expected {' or '.join(sorted(until))}")
-            self.statement(code, exit_label)
-
     def statement(self, code: Code, exit_label: str | None) -> None:
         p = self.p
         t = p.tok
@@ -177,18 +135,11 @@ class KrlReader(KrlExpressions):
             self.if_(code, exit_label)
         elif u == "FOR":
             self.for_(code)
-        elif u == "WHILE":
+        elif u in ("WHILE", "LOOP"):
             p.next()
-            top, done = code.new_label(), code.new_label()
-            code.place(top)
-            cond = self.condition()
+            cond = self.condition() if u == "WHILE" else None
             p.end_line()
-            code.unless(t.loc, cond, done)
-            self.block(code, {"ENDWHILE"}, done)
-            p.next()
-            p.end_line()
-            code.jump(t.loc, top)
-            code.place(done)
+            while_loop(code, t.loc, cond, lambda done: self._to_end(code, "END" + u, done))
         elif u == "REPEAT":
             p.next()
             p.end_line()
@@ -199,16 +150,6 @@ class KrlReader(KrlExpressions):
             cond = self.condition()
             p.end_line()
             code.unless(until.loc, cond, top)
-            code.place(done)
-        elif u == "LOOP":
-            p.next()
-            p.end_line()
-            top, done = code.new_label(), code.new_label()
-            code.place(top)
-            self.block(code, {"ENDLOOP"}, done)
-            p.next()
-            p.end_line()
-            code.jump(t.loc, top)
             code.place(done)
         elif u == "EXIT":
             if exit_label is None:
@@ -238,117 +179,12 @@ class KrlReader(KrlExpressions):
         else:
             raise p.fail("expected a statement")
 
-    def declaration(self, code: Code) -> bool:
-        """DECL / a typed declaration / SIGNAL; False when the line is none of them."""
-        p = self.p
-        t = p.tok
-        if t.kind != "id":
-            return False
-        if t.upper == "SIGNAL":
-            p.next()
-            name = p.expect_kind("id", "the signal's name")
-            io = p.expect_kind("sys", "$IN[n] or $OUT[n]")
-            if io.upper not in ("$IN", "$OUT"):
-                raise p.unsupported(f"a signal on {io.text}")
-            p.expect("[")
-            n = int(number(float(p.expect_kind("num", "the I/O number").text)))
-            p.expect("]")
-            if p.accept("TO"):
-                raise p.unsupported("a signal of several bits (TO)")
-            p.end_line()
-            self.signals[name.upper] = (io.upper, n)
-            return True
-        words = {"DECL", "GLOBAL", "CONST"}
-        if t.upper not in words and not (
-            t.upper in STRUCT_TYPES | SIMPLE_TYPES and p.peek().kind == "id"
-        ):
-            return False
-        while p.at(*words):
-            p.next()
-        type_tok = p.expect_kind("id", "a type")
-        typ = type_tok.upper
-        if typ not in STRUCT_TYPES | SIMPLE_TYPES:
-            raise p.unsupported(f"the type {type_tok.text}")
-        while True:
-            name = p.expect_kind("id", "a variable name")
-            key = name.upper
-            size = None
-            if p.accept("["):
-                size = int(number(float(p.expect_kind("num", "the array's size").text)))
-                if p.accept(","):
-                    raise p.unsupported("an array of several dimensions")
-                p.expect("]")
-            self.types[key] = typ
-            init = None
-            if p.accept("="):
-                init = self.ex.parse()
-            code.do(name.loc, self._declare(key, typ, size, init))
-            if not p.accept(","):
-                break
-        p.end_line()
-        return True
-
-    def _declare(self, key: str, typ: str, size: int | None, init: Fn | None) -> Fn:
-        def run(vm: VM) -> None:
-            if size is not None:
-                vm.vars[key] = [({} if typ in STRUCT_TYPES else None) for _ in range(size)]
-            else:
-                vm.vars[key] = {} if typ in STRUCT_TYPES else None
-            if init is not None:
-                vm.vars[key] = _convert(typ, vm.vars[key], init(vm))
-
-        return run
-
-    def assignment(self, code: Code) -> None:
-        p = self.p
-        t = p.tok
-        target = self.lvalue()
-        p.expect("=", "'='")
-        value = self.ex.parse()
-        p.end_line()
-        code.do(t.loc, lambda vm: target(vm, value(vm)))
-
-    def lvalue(self) -> Any:
-        """A setter (vm, value) for a variable, an element, a field or a system variable."""
-        p = self.p
-        t = p.next()
-        name = t.upper
-        index = None
-        if p.accept("["):
-            index = self.ex.parse()
-            p.expect("]")
-        fields = []
-        while p.accept("."):
-            fields.append(p.expect_kind("id", "a field name").upper)
-        if t.kind == "sys":
-            return self._system_setter(t, name, index, fields)
-        if name in self.signals:
-            kind, n = self.signals[name]
-            if kind != "$OUT" or index is not None or fields:
-                raise error(t.loc, f"signal {t.text} is an input: it cannot be set")
-            return lambda vm, v: vm.motion.set_output(n, t.text, boolean(v, t.text))
-
-        def set_var(vm: VM, v: Any) -> None:
-            if name not in vm.vars:
-                raise error(t.loc, f"{t.text} is not declared")
-            typ = self.types.get(name, "")
-            if index is None and not fields:
-                vm.vars[name] = _convert(typ, vm.vars[name], v)
-                return
-            holder = vm.vars[name]
-            if index is not None:
-                i = _index(holder, index(vm), t.text)
-                if not fields:
-                    holder[i] = _convert(typ, holder[i], v)
-                    return
-                holder = holder[i]
-            for f in fields[:-1]:
-                holder = holder.setdefault(f, {})
-            if not isinstance(holder, dict):
-                raise ProgramError(f"{t.text} has no fields")
-            holder[fields[-1]] = v
-
-        return set_var
+    def _to_end(self, code: Code, end: str, exit_label: str | None) -> Loc:
+        """The statements of a loop's body and its ``end`` line; the end's place."""
+        self.block(code, {end}, exit_label)
+        t = self.p.next()
+        self.p.end_line()
+        return t.loc
 
     # ------------------------------------------------------------------ motions and waits
     def motion(self, code: Code) -> None:
@@ -456,18 +292,8 @@ class KrlReader(KrlExpressions):
             if step_tok.kind not in ("num", "op"):
                 raise error(step_tok.loc, "STEP must be a constant")
         p.end_line()
-
-        def get(vm: VM) -> Any:
-            return vm.vars[var]
-
-        def put(vm: VM, v: float) -> None:
-            vm.vars[var] = int(v)
-
-        head = code.for_open(t.loc, get, put, start, stop, step)
-        self.block(code, {"ENDFOR"}, head[2])
-        end = p.next()
-        p.end_line()
-        code.for_close(end.loc, get, put, head)
+        body = lambda done: self._to_end(code, "ENDFOR", done)  # noqa: E731
+        variable_loop(code, t.loc, var, start, stop, step, body, whole=True)
 
     def bas(self, code: Code) -> None:
         p = self.p
@@ -497,10 +323,8 @@ def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotPr
     if dat is not None:
         r.read_file(dat)
     r.read_file(path)
-    if r.main is None:
+    if r.first is None:
         raise error(Loc(str(path), 1, 1), "no DEF routine in the file")
     for name, (kind, n) in r.signals.items():
         (outputs if kind == "$OUT" else inputs).setdefault(n, name.lower())
-    routines = {k: c.finish() for k, c in r.routines.items()}
-    check_calls(routines, "KRL")
-    return RobotProgram(str(path), "krl", routines, r.main, r.setup, inputs, outputs)
+    return r.program("krl", r.first, r.setup, inputs, outputs)

@@ -25,63 +25,55 @@ arguments other than ``\\WObj``, ``TEST``, ``GOTO``, ...) is a ProgramError at i
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
 from workcell.errors import ProgramError
-from workcell.robotprog.exprs import ExprParser, Fn, number
+from workcell.robotprog.exprs import Fn, number
+from workcell.robotprog.rapid_exprs import RapidExpressions
 from workcell.robotprog.rapid_run import (
     ATOMS,
     BINARY,
     INSTRUCTIONS,
-    MATH,
     PREDEFINED,
     RECORDS,
     UNARY,
     _array_index,
     _component,
-    _component_of,
-    _crobt,
-    _dinput,
-    _element_of,
     _instruction,
-    _offs,
-    _reltool,
     _run_data,
     _setup,
     record,
 )
-from workcell.robotprog.runtime import VM, Code, RobotProgram, check_calls
-from workcell.robotprog.source import Loc, Parser, Token, error, tokenize
+from workcell.robotprog.reading import Reader, branch, variable_loop, while_loop
+from workcell.robotprog.runtime import VM, Code, RobotProgram
+from workcell.robotprog.source import NUMBER, Loc, error, tokenize
 
 __all__ = ["read"]
 
 RULES = [
     ("_ws", r"[ \t\r\f\n]+"),
     ("_comment", r"![^\n]*"),
-    ("num", r"(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?"),
+    ("num", NUMBER),
     ("str", r'"[^"\n]*"'),
     ("id", r"[A-Za-z_][A-Za-z0-9_]*"),
     ("op", r":=|<>|>=|<=|[-+*/(){}\[\],.:;=<>\\]"),
 ]
 
 
-class RapidReader:
+class RapidReader(RapidExpressions, Reader):
     """Reads one RAPID module (module doc)."""
 
+    language, binary, unary = "RAPID", BINARY, UNARY
+
     def __init__(self, path: str) -> None:
-        self.path = path
+        super().__init__(path)
         self.types: dict[str, str] = {k.upper(): t for k, (t, _) in PREDEFINED.items()}
-        self.routines: dict[str, Code] = {}
         self.setup: list[Any] = [_setup]
-        self.first: str | None = None
         self.signals: set[str] = set()
 
     def read(self, text: str) -> None:
-        p = Parser(tokenize(text, self.path, RULES), "RAPID")
-        self.p = p
-        self.ex = ExprParser(p, BINARY, UNARY, self.primary)
+        p = self.parse(tokenize(text, self.path, RULES))
         p.expect("MODULE", "MODULE")
         p.expect_kind("id", "the module's name")
         if p.accept("("):
@@ -152,11 +144,7 @@ class RapidReader:
         if not p.at(")"):
             raise p.unsupported("a procedure with parameters")
         p.next()
-        code = Code(name.upper)
-        if name.upper in self.routines:
-            raise error(name.loc, f"procedure {name.text} is defined twice")
-        self.routines[name.upper] = code
-        self.first = self.first or name.upper
+        code = self.define(name, name.upper, "procedure")
         while p.at("VAR", "PERS", "CONST", "LOCAL"):
             p.accept("LOCAL")
             self.declaration(code)
@@ -164,13 +152,6 @@ class RapidReader:
         p.next()
 
     # ------------------------------------------------------------------ statements
-    def block(self, code: Code, until: set[str]) -> None:
-        p = self.p
-        while not (p.tok.kind == "id" and p.tok.upper in until):
-            if p.tok.kind == "eof":
-                raise p.fail(f"expected {' or '.join(sorted(until))}")
-            self.statement(code)
-
     def statement(self, code: Code) -> None:
         p = self.p
         t = p.tok
@@ -183,15 +164,9 @@ class RapidReader:
             self.for_(code)
         elif u == "WHILE":
             p.next()
-            top, done = code.new_label(), code.new_label()
-            code.place(top)
             cond = self.ex.parse()
             p.expect("DO")
-            code.unless(t.loc, cond, done)
-            self.block(code, {"ENDWHILE"})
-            p.next()
-            code.jump(t.loc, top)
-            code.place(done)
+            while_loop(code, t.loc, cond, lambda done: self._to_end(code, "ENDWHILE"))
         elif u == "RETURN":
             p.next()
             p.expect(";", "';'")
@@ -292,11 +267,7 @@ class RapidReader:
             return
         p.next()
         while True:
-            other = code.new_label()
-            code.unless(t.loc, cond, other)
-            self.block(code, {"ELSEIF", "ELSE", "ENDIF"})
-            code.jump(t.loc, done)
-            code.place(other)
+            branch(code, t.loc, cond, lambda: self.block(code, {"ELSEIF", "ELSE", "ENDIF"}), done)
             if p.at("ELSEIF"):
                 t = p.next()
                 cond = self.ex.parse()
@@ -321,112 +292,13 @@ class RapidReader:
             step = self.ex.parse()
         p.expect("DO")
         self.types.setdefault(var, "num")
+        body = lambda done: self._to_end(code, "ENDFOR")  # noqa: E731
+        variable_loop(code, t.loc, var, start, stop, step, body)
 
-        def get(vm: VM) -> Any:
-            return vm.vars[var]
-
-        def put(vm: VM, v: float) -> None:
-            vm.vars[var] = v
-
-        head = code.for_open(t.loc, get, put, start, stop, step)
-        self.block(code, {"ENDFOR"})
-        end = p.next()
-        code.for_close(end.loc, get, put, head)
-
-    # ------------------------------------------------------------------ expressions
-    def primary(self) -> Fn:
-        p = self.p
-        t = p.next()
-        if t.kind == "num":
-            v = float(t.text)
-            return lambda vm: v
-        if t.kind == "str":
-            s = t.text[1:-1]
-            return lambda vm: s
-        if t.text == "(":
-            inner = self.ex.parse()
-            p.expect(")")
-            return inner
-        if t.text == "[":
-            items = []
-            while not p.at("]"):
-                items.append(self.ex.parse())
-                if not p.accept(","):
-                    break
-            p.expect("]")
-            return lambda vm: [f(vm) for f in items]
-        if t.kind != "id":
-            raise p.fail("expected a value", t)
-        u = t.upper
-        if u in ("TRUE", "FALSE"):
-            return lambda vm: u == "TRUE"
-        if p.at("("):
-            return self.function(t)
-        if u not in self.types:
-            if t.text.lower() in self.signals:  # a signal the file's header lists
-                sig = t.text
-                return lambda vm: _dinput(vm, sig)
-            raise error(t.loc, f"{t.text} is not declared (nor a signal the file's header lists)")
-
-        def var(vm: VM) -> Any:
-            if u in vm.vars:
-                v = vm.vars[u]
-            elif t.text.lower() in PREDEFINED or u.lower() in PREDEFINED:
-                v = PREDEFINED[t.text.lower() if t.text.lower() in PREDEFINED else u.lower()][1]
-            else:
-                v = None
-            if v is None:
-                raise error(t.loc, f"{t.text} is used before it has a value")
-            return v
-
-        base: Fn = var
-        while True:
-            if p.accept("."):
-                c = p.expect_kind("id", "a component")
-                base = _component_of(base, c)
-            elif p.accept("{"):
-                idx = self.ex.parse()
-                p.expect("}")
-                base = _element_of(base, idx, t.text)
-            else:
-                return base
-
-    def function(self, t: Token) -> Fn:
-        p = self.p
-        p.expect("(")
-        if t.upper == "DINPUT":
-            sig = p.expect_kind("id", "a signal's name").text
-            p.expect(")")
-            return lambda vm: _dinput(vm, sig)
-        args: list[Fn] = []
-        opts: dict[str, Fn] = {}
-        while not p.at(")"):
-            if p.accept("\\"):
-                o = p.expect_kind("id", "an optional argument").upper
-                p.expect(":=")
-                opts[o] = self.ex.parse()
-            else:
-                args.append(self.ex.parse())
-            if not p.accept(","):
-                break
-        p.expect(")")
-        u = t.upper
-        if u == "OFFS" and len(args) == 4 and not opts:
-            return lambda vm: _offs(*(f(vm) for f in args))
-        if u == "RELTOOL" and len(args) == 4 and set(opts) <= {"RX", "RY", "RZ"}:
-            return lambda vm: _reltool([f(vm) for f in args], {k: f(vm) for k, f in opts.items()})
-        if u == "CROBT" and not args and not opts:
-            return lambda vm: _crobt(vm)
-        if u == "CJOINTT" and not args and not opts:
-            return lambda vm: {"robax": {f"rax_{i + 1}": math.degrees(v) for i, v in enumerate(vm.motion.joints())},
-                               "extax": {f"e{c}": 9e9 for c in "abcdef"}}  # fmt: skip
-        if u in ("ABS", "SQRT", "SIN", "COS", "TAN", "ROUND", "TRUNC") and len(args) == 1:
-            f = MATH[u]
-            return lambda vm: f(number(args[0](vm), t.text))
-        raise error(
-            t.loc,
-            f"the function {t.text} (with these arguments) is not supported by workcell's RAPID reader",
-        )
+    def _to_end(self, code: Code, end: str) -> Loc:
+        """The statements of a loop's body and its ``end``; the end's place."""
+        self.block(code, {end})
+        return self.p.next().loc
 
 
 def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotProgram:
@@ -438,6 +310,4 @@ def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotPr
     if not r.routines:
         raise error(Loc(str(path), 1, 1), "no PROC in the module")
     main = "MAIN" if "MAIN" in r.routines else r.first
-    routines = {k: c.finish() for k, c in r.routines.items()}
-    check_calls(routines, "RAPID")
-    return RobotProgram(str(path), "rapid", routines, main or "", r.setup, inputs, outputs)
+    return r.program("rapid", main or "", r.setup, inputs, outputs)

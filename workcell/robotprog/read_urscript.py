@@ -25,9 +25,10 @@ from pathlib import Path
 from typing import Any
 
 from workcell.errors import ProgramError
-from workcell.robotprog.exprs import ExprParser, Fn, number
-from workcell.robotprog.runtime import VM, Code, RobotProgram, check_calls
-from workcell.robotprog.source import Loc, Parser, Token, error, tokenize
+from workcell.robotprog.exprs import Fn, number
+from workcell.robotprog.reading import Reader, branch, while_loop
+from workcell.robotprog.runtime import VM, Code, RobotProgram
+from workcell.robotprog.source import NUMBER, Loc, Token, error, tokenize
 from workcell.robotprog.urscript_run import (
     BINARY,
     BUILTINS,
@@ -45,7 +46,7 @@ RULES = [
     ("_cont", r"\\\n"),
     ("_comment", r"#[^\n]*"),
     ("nl", r"\n"),
-    ("num", r"(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?"),
+    ("num", NUMBER),
     ("str", r'"[^"\n]*"|\'[^\'\n]*\''),
     ("pose", r"p\["),
     ("id", r"[A-Za-z_][A-Za-z0-9_]*"),
@@ -53,18 +54,13 @@ RULES = [
 ]
 
 
-class UrReader:
+class UrReader(Reader):
     """Reads one URScript file (module doc)."""
 
-    def __init__(self, path: str) -> None:
-        self.path = path
-        self.routines: dict[str, Code] = {}
-        self.first: str | None = None
+    language, binary, unary, case_sensitive = "URScript", BINARY, UNARY, True
 
     def read(self, text: str) -> str:
-        p = Parser(tokenize(text, self.path, RULES), "URScript")
-        self.p = p
-        self.ex = ExprParser(p, BINARY, UNARY, self.primary)
+        p = self.parse(tokenize(text, self.path, RULES))
         top = Code("#TOP")
         p.skip_nl()
         while p.tok.kind != "eof":
@@ -90,23 +86,10 @@ class UrReader:
         p.next()
         p.expect(":", "':'")
         p.end_line()
-        code = Code(name.text)
-        if name.text in self.routines:
-            raise error(name.loc, f"function {name.text} is defined twice")
-        self.routines[name.text] = code
-        self.first = self.first or name.text
+        code = self.define(name, name.text, "function")
         self.block(code, {"end"}, None)
         p.next()
         p.end_line()
-
-    def block(self, code: Code, until: set[str], loop_end: str | None) -> None:
-        p = self.p
-        p.skip_nl()
-        while not (p.tok.kind == "id" and p.tok.text in until):
-            if p.tok.kind == "eof":
-                raise p.fail(f"expected {' or '.join(sorted(until))}")
-            self.statement(code, loop_end)
-            p.skip_nl()
 
     def statement(self, code: Code, loop_end: str | None) -> None:
         p = self.p
@@ -191,11 +174,9 @@ class UrReader:
         while True:
             p.expect(":", "':'")
             p.end_line()
-            other = code.new_label()
-            code.unless(t.loc, cond, other)
-            self.block(code, {"elif", "else", "end"}, loop_end)
-            code.jump(t.loc, done)
-            code.place(other)
+            branch(
+                code, t.loc, cond, lambda: self.block(code, {"elif", "else", "end"}, loop_end), done
+            )
             if p.at("elif"):
                 t = p.next()
                 cond = self.ex.parse()
@@ -222,14 +203,13 @@ class UrReader:
         cond = self.ex.parse()
         p.expect(":", "':'")
         p.end_line()
-        top, done = code.new_label(), code.new_label()
-        code.place(top)
-        code.unless(t.loc, cond, done)
-        self.block(code, {"end"}, done)
-        p.next()
-        p.end_line()
-        code.jump(t.loc, top)
-        code.place(done)
+
+        def body(done: str) -> None:
+            self.block(code, {"end"}, done)
+            p.next()
+            p.end_line()
+
+        while_loop(code, t.loc, cond, body)
 
     def _input_wait(self) -> tuple[int, bool] | None:
         """``[not] get_(standard_)digital_in(n) [== True|False]: sync()|sleep(x) ... end``:
@@ -288,12 +268,7 @@ class UrReader:
             return self.postfix(inner)
         if t.kind == "pose" or t.text == "[":
             p.next()
-            items = []
-            while not p.at("]"):
-                items.append(self.ex.parse())
-                if not p.accept(","):
-                    break
-            p.expect("]")
+            items = self.items("]")
             if t.kind == "pose":
                 if len(items) != 6:
                     raise error(t.loc, f"a pose has 6 numbers, got {len(items)}")
@@ -359,6 +334,4 @@ def read(path: Path, outputs: dict[int, str], inputs: dict[int, str]) -> RobotPr
     """Read a URScript file as a :class:`RobotProgram`."""
     r = UrReader(str(path))
     main = r.read(path.read_text(encoding="utf-8", errors="replace"))
-    routines = {k: c.finish() for k, c in r.routines.items()}
-    check_calls(routines, "URScript")
-    return RobotProgram(str(path), "urscript", routines, main, [], inputs, outputs)
+    return r.program("urscript", main, [], inputs, outputs)

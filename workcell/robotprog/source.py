@@ -14,7 +14,9 @@ from typing import NamedTuple
 
 from workcell.errors import ProgramError
 
-__all__ = ["Loc", "Parser", "Token", "error", "tokenize"]
+__all__ = ["NUMBER", "Loc", "Parser", "Token", "error", "tokenize"]
+
+NUMBER = r"(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?"  # every language's numbers: 12, 1.5, .5, 1e-3
 
 
 class Loc(NamedTuple):
