@@ -44,7 +44,9 @@ from workcell.robotprog.writing import (
     header,
     identifier,
     joint_notes,
+    override_of,
     tool_law,
+    via_pose,
 )
 
 __all__ = ["wpr", "write"]
@@ -124,7 +126,7 @@ def write(prog: Program, name: str) -> dict[str, str]:
 
     for i, ins in enumerate(prog.instructions):
         if isinstance(ins, MoveJoint | MoveLinear | MoveCircular):
-            f = ins.speed.override if isinstance(ins, MoveJoint) else ins.override
+            f = override_of(ins)
             ov = f"OVERRIDE={max(1, min(100, whole(100.0 * f, 'overrides')))}%"
             if state.get("ov") != ov:
                 mn.append(ov)
@@ -144,8 +146,7 @@ def write(prog: Program, name: str) -> dict[str, str]:
                 end = point(_cart(prog, ins.pose, ins.q))
                 mn.append(f"L P[{end}] {speed} {term(ins.zone)}{opt}")
             else:
-                via = ins.pose.copy()
-                via[:3, 3] = ins.via
+                via = via_pose(ins)
                 pv = point(_cart(prog, via, ins.q))
                 end = point(_cart(prog, ins.pose, ins.q))
                 mn.append(f"C P[{pv}]")

@@ -32,7 +32,14 @@ from workcell.robotprog.instructions import (
     WaitInput,
 )
 from workcell.robotprog.rotations import KUKA_FROM_OURS, fmt, to_kuka_frame, zyx
-from workcell.robotprog.writing import header, identifier, joint_notes, tool_law
+from workcell.robotprog.writing import (
+    header,
+    identifier,
+    joint_notes,
+    override_of,
+    tool_law,
+    via_pose,
+)
 
 __all__ = ["frame", "write"]
 
@@ -65,7 +72,7 @@ def write(prog: Program, name: str) -> dict[str, str]:
     """The program as KRL: ``{".src": text, ".dat": text}``."""
     prog.notes += joint_notes(prog, "KRL", ("jerk",))
     fs = [
-        i.speed.override if isinstance(i, MoveJoint) else i.override
+        override_of(i)
         for i in prog.instructions
         if isinstance(i, MoveJoint | MoveLinear | MoveCircular)
     ]
@@ -103,7 +110,7 @@ def write(prog: Program, name: str) -> dict[str, str]:
 
     for i, ins in enumerate(prog.instructions):
         if isinstance(ins, MoveJoint | MoveLinear | MoveCircular):
-            f = ins.speed.override if isinstance(ins, MoveJoint) else ins.override
+            f = override_of(ins)
             setting("$OV_PRO", str(_pct(f)))
             if ins.zone > 0:
                 setting("$APO.CDIS", fmt(1000.0 * ins.zone, 6))
@@ -121,8 +128,7 @@ def write(prog: Program, name: str) -> dict[str, str]:
             if isinstance(ins, MoveLinear):
                 src.append(f"LIN {point('E6POS', _e6pos(prog, ins.pose, ins.q))}{apo}")
             else:
-                via = ins.pose.copy()
-                via[:3, 3] = ins.via
+                via = via_pose(ins)
                 aux = point("POS", "{" + frame(to_kuka_frame(via)) + "}")
                 end = point("E6POS", _e6pos(prog, ins.pose, ins.q))
                 src.append(f"CIRC {aux}, {end}{apo}")

@@ -35,7 +35,14 @@ from workcell.robotprog.instructions import (
     WaitInput,
 )
 from workcell.robotprog.rotations import fmt, quat_wxyz
-from workcell.robotprog.writing import header, identifier, joint_notes, tool_law
+from workcell.robotprog.writing import (
+    header,
+    identifier,
+    joint_notes,
+    override_of,
+    tool_law,
+    via_pose,
+)
 
 __all__ = ["PREDEFINED_ZONES", "write"]
 
@@ -104,7 +111,7 @@ def write(prog: Program, name: str) -> dict[str, str]:
 
     for i, ins in enumerate(prog.instructions):
         if isinstance(ins, MoveJoint | MoveLinear | MoveCircular):
-            f = ins.speed.override if isinstance(ins, MoveJoint) else ins.override
+            f = override_of(ins)
             setting("velset", f"    VelSet {100.0 * f:.10g}, 5000;")
         if isinstance(ins, MoveJoint):
             z = zone(ins.zone)
@@ -126,8 +133,7 @@ def write(prog: Program, name: str) -> dict[str, str]:
                 end = point("robtarget", f"[{_frame(ins.pose)[1:-1]},[{conf}],{_EAX}]")
                 body.append(f"    MoveL {end}, {sp}, {z}, t_tcp \\WObj:=w_base;")
             else:
-                via = ins.pose.copy()
-                via[:3, 3] = ins.via
+                via = via_pose(ins)
                 cv = point("robtarget", f"[{_frame(via)[1:-1]},[{conf}],{_EAX}]")
                 end = point("robtarget", f"[{_frame(ins.pose)[1:-1]},[{conf}],{_EAX}]")
                 body.append(f"    MoveC {cv}, {end}, {sp}, {z}, t_tcp \\WObj:=w_base;")

@@ -33,7 +33,7 @@ from workcell.robotprog.instructions import (
     WaitInput,
 )
 from workcell.robotprog.rotations import fmt, rotvec
-from workcell.robotprog.writing import header, identifier, joint_notes, tool_law
+from workcell.robotprog.writing import header, identifier, joint_notes, tool_law, via_pose
 
 __all__ = ["write"]
 
@@ -84,8 +84,7 @@ def write(prog: Program, name: str) -> dict[str, str]:
             if isinstance(ins, MoveLinear):
                 out.append(f"  movel({pose(ins.pose)}, {law})")
             else:
-                via = ins.pose.copy()
-                via[:3, 3] = ins.via
+                via = via_pose(ins)
                 out.append(f"  movec({pose(via)}, {pose(ins.pose)}, {law}, mode=0)")
         elif isinstance(ins, Wait):
             out.append(f"  sleep({_num(ins.seconds)})")

@@ -6,7 +6,9 @@
 - :func:`identifier`: a program or variable name the language accepts;
 - :func:`line_law`: a tool speed and acceleration for a straight line that had none (a
   thesis or profile "jerk" straight line): the trapezoid that takes the line's own time;
-- :func:`joint_note`: the note for joint moves timed by a profile the language lacks.
+- :func:`joint_notes`: the notes for joint moves timed by a profile the language lacks;
+- :func:`override_of`, :func:`via_pose`: a motion's speed override, a circular move's
+  via point as a pose.
 """
 
 from __future__ import annotations
@@ -24,7 +26,16 @@ from workcell.robotprog.instructions import (
     Program,
 )
 
-__all__ = ["DEFAULT_TOOL_ACCELERATION", "end_pose", "header", "identifier", "line_law"]
+__all__ = [
+    "DEFAULT_TOOL_ACCELERATION",
+    "end_pose",
+    "header",
+    "identifier",
+    "joint_notes",
+    "line_law",
+    "override_of",
+    "via_pose",
+]
 
 Array = NDArray[np.float64]
 DEFAULT_TOOL_ACCELERATION = 1.2  # m/s^2, as the simulator's
@@ -115,3 +126,15 @@ def joint_notes(prog: Program, language: str, native: tuple[str, ...]) -> list[s
         f"by {how[native[0]]}, so their times differ"
         for p in other
     ]
+
+
+def override_of(ins: MoveJoint | MoveLinear | MoveCircular) -> float:
+    """The speed override (0 < f <= 1) a motion ran with."""
+    return ins.speed.override if isinstance(ins, MoveJoint) else ins.override
+
+
+def via_pose(ins: MoveCircular) -> Array:
+    """A circular move's via point (m, base frame) as a pose: the end pose's orientation."""
+    via = ins.pose.copy()
+    via[:3, 3] = ins.via
+    return via
