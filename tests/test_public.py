@@ -205,6 +205,8 @@ MODULES = [
     "workcell.sim.physics_devices",
     "workcell.logic",
     "workcell.logic.scheduler",
+    "workcell.logic.clock",
+    "workcell.logic.block",
     "workcell.logic.programs",
     "workcell.program.logiccommands",
     "workcell.program.grammar_logic",

@@ -49,30 +49,25 @@ Gantt chart. Times in seconds.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import threading
 from collections.abc import Mapping
 from typing import Any
 
-import mujoco
-import numpy as np
-from numpy.typing import NDArray
-
 from workcell import limits
 from workcell.cell.devices import TIME_EPS, format_value, same_value
 from workcell.checks import is_finite_number, shown
 from workcell.errors import DeadlockError, ProgramError, WorkcellError
+from workcell.logic.block import ProgramBlock
+from workcell.logic.clock import CHUNK, RunClock
 from workcell.logic.programs import MAX_CALLS_AT_ONE_TIME, Program, ProgramSim, programs_of
 
 Simulator = Any  # the simulator it is handed (workcell.sim sits above: it calls this module)
 
 __all__ = ["ProgramBlock", "Run", "check_run", "run_programs"]
 
-Array = NDArray[np.float64]
 _SCHEDULER = "\0scheduler"
-_CHUNK = 16384  # frames made at once
 _MAX_TURNS_AT_ONE_TIME = 100_000  # program turns without simulated time passing
 
 
@@ -112,55 +107,8 @@ def check_run(sim: Simulator, until: float | None) -> None:
         limits.check("max_sim_time", float(until), "run_programs: until")
 
 
-class ProgramBlock:
-    """The run's block (module doc): like a ``concurrently()`` block
-    (:mod:`workcell.sim.concurrent`: ``start``, ``base``, ``clocks``, ``moves``), moves
-    kept per robot, but commands other than motions wait for the program's robot to stop
-    instead of being refused."""
-
-    def __init__(self, run: Run) -> None:
-        self.start = run.sim.sim_time
-        self.base = run.sim.data.qpos.copy()
-        self.clocks: dict[str, float] = {}
-        self.moves: list[Any] = []  # the simulator's PlannedMove records
-        self.run = run
-        self.releases = 0  # times control went back to the scheduler (frames.py reads it)
-
-    def refuse(self, sim: Simulator, command: str) -> None:
-        self.run.sync()
-
-    def clock(self, sim: Simulator, robot: str) -> float:
-        return max(self.clocks.get(robot, sim.sim_time), sim.sim_time)
-
-    def add(self, sim: Simulator, move: Any) -> None:
-        run = self.run
-        if run.current is not None:
-            run.owns(run.current, move.robot, move.command)
-            if move.record is not None:
-                move.record["program_name"] = run.current.name
-        self.moves.append(move)
-        run.flight.setdefault(move.robot, []).append(len(self.moves) - 1)
-
-    def robot_of_program(self) -> str | None:
-        cur = self.run.current
-        return None if cur is None else cur.robot
-
-    def tag(self, record: dict[str, Any]) -> None:
-        if self.run.current is not None:
-            record["program_name"] = self.run.current.name
-
-    def wait(self, sim: Simulator, seconds: float) -> None:
-        self.run.wait(seconds)
-
-    def wait_signal(self, sim: Simulator, name: str, value: Any, timeout: float | None) -> None:
-        self.run.wait_signal(name, value, timeout)
-
-    def signal_set(self, sim: Simulator, name: str) -> None:
-        self.run.wake_signals()
-
-
-class Run:
-    """One ``run_programs`` (module doc)."""
+class Run(RunClock):
+    """One ``run_programs`` (module doc; its clock: :mod:`workcell.logic.clock`)."""
 
     def __init__(self, sim: Simulator, programs: list[Program], until: float | None) -> None:
         self.sim, self.programs, self.until = sim, programs, until
@@ -211,7 +159,7 @@ class Run:
             if math.isinf(t_next):
                 if logic is None or not logic.alive():
                     raise DeadlockError(self._deadlock())
-                t_next = sim.sim_time + _CHUNK * sim.dt
+                t_next = sim.sim_time + CHUNK * sim.dt
             if self.until is not None:
                 t_next = min(t_next, self.until)
             if logic is not None:
@@ -381,144 +329,6 @@ class Run:
                 "without simulated time passing (a busy loop? wait with wait_signal or wait)"
             )
 
-    # ------------------------------------------------------------------ time
-    def _flying(self) -> bool:
-        return any(self.flight.values())
-
-    def _move_end(self, i: int) -> float:
-        return float(self.block.moves[i].times[-1])
-
-    def _next_time(self) -> float:
-        """The earliest timed thing after now (inf when nothing is timed)."""
-        best = math.inf
-        for p in self.programs:
-            if p.state == "time":
-                best = min(best, p.wake)
-            elif p.state == "signal" and p.deadline is not None:
-                best = min(best, p.deadline)
-        for moves in self.flight.values():
-            if moves:
-                best = min(best, self._move_end(moves[-1]))
-        return best
-
-    def _watched(self) -> dict[str, list[Any]]:
-        out: dict[str, list[Any]] = {}
-        for p in self.programs:
-            if p.state == "signal":
-                out.setdefault(p.waits_for[0], []).append(p.waits_for[1])
-        return out
-
-    def _wake(self) -> None:
-        now = self.sim.sim_time
-        values = None if self.sim._logic is None else self.sim._logic.values
-        for p in self.programs:
-            timed = p.state == "time" and p.wake <= now + TIME_EPS
-            if timed or (p.state == "robot" and not self.flight.get(p.robot)):
-                p.state = "ready"
-            elif p.state == "signal":
-                if same_value(values[p.waits_for[0]], p.waits_for[1]):
-                    p.state, p.matched = "ready", True
-                elif p.deadline is not None and p.deadline <= now + TIME_EPS:
-                    p.state, p.matched = "ready", False
-
-    def _show_now(self) -> None:
-        """The simulator's data shows the last frame (a planned move left its robot at
-        its target)."""
-        sim = self.sim
-        sim.data.qpos[:] = sim.timeline.frame(-1)[2]
-        mujoco.mj_kinematics(sim.model, sim.data)
-
-    def advance(self, t_stop: float) -> None:
-        """Make the frames from now to ``t_stop`` (module doc, 3.)."""
-        sim = self.sim
-        self._show_now()
-        while sim.sim_time < t_stop - TIME_EPS:
-            now = sim.sim_time
-            ends = [self._move_end(i) for ms in self.flight.values() for i in ms]
-            t_win = min([t_stop, *(e for e in ends if e > now + TIME_EPS)])
-            times = self._frame_times(now, t_win)
-            limits.check("max_frames_per_command", len(times), "run_programs: frames at once")
-            sim.timeline.reserve(len(times), "run_programs")
-            Q = self._rows(now, times)
-            carried = [c for r in sim._holds for c in sim._carried_safe(r)]
-            stopped = False
-            for lo in range(0, len(times), _CHUNK):
-                part = times[lo : lo + _CHUNK]
-                k = sim._emit(part, Q[lo : lo + len(part)], carried)
-                if k < len(part):
-                    stopped = True
-                    break
-            self._finish_moves(sim.sim_time)
-            if stopped:
-                return
-
-    def _frame_times(self, now: float, t_win: float) -> Array:
-        """The frames in (now, t_win]: the moving robots' own sample times and t_win;
-        while the cell is alive, gaps longer than dt between them are filled every dt (and
-        at the timed sources' times, :meth:`Simulator._time_grid`)."""
-        sim = self.sim
-        parts = [np.array([t_win])]
-        for ms in self.flight.values():
-            for i in ms:
-                t = self.block.moves[i].times
-                parts.append(t[(t > now + TIME_EPS) & (t <= t_win + TIME_EPS)])
-        times = _merged(parts, now, t_win)
-        logic = sim._logic
-        if logic is not None and logic.alive():
-            edges = np.concatenate([[now], times])
-            gaps = np.flatnonzero(np.diff(edges) > sim.dt + TIME_EPS)
-            if len(gaps):
-                fill = [sim._time_grid(edges[g], edges[g + 1]) for g in gaps]
-                times = _merged([times, *fill], now, t_win)
-        return times
-
-    def _rows(self, now: float, times: Array) -> Array:
-        """Full qpos rows at ``times``: the robots along their moves, the rest as now."""
-        sim = self.sim
-        base = sim.data.qpos
-        Q = np.repeat(base[None, :], len(times), axis=0)
-        for robot, ms in self.flight.items():
-            if not ms:
-                continue
-            adr = sim._qadr[robot]
-            T = [np.array([now])]
-            V = [base[adr][None, :]]
-            for i in ms:
-                mv = self.block.moves[i]
-                sel = mv.times > now + TIME_EPS
-                T.append(mv.times[sel])
-                V.append(mv.rows[sel])
-            T_all, V_all = np.concatenate(T), np.vstack(V)
-            for c, a in enumerate(adr):
-                Q[:, a] = np.interp(times, T_all, V_all[:, c])
-        return Q
-
-    def _finish_moves(self, now: float, *, cut: bool = False) -> None:
-        """Record the moves that have ended by ``now`` (``cut``: all, stopped at now)."""
-        sim = self.sim
-        done = []
-        for ms in self.flight.values():
-            while ms and (cut or self._move_end(ms[0]) <= now + TIME_EPS):
-                done.append(ms.pop(0))
-        for i in sorted(done, key=lambda i: (min(self._move_end(i), now), i)):
-            mv = self.block.moves[i]
-            end = self._move_end(i)
-            rec = None if mv.record is None else dict(mv.record)
-            start = rec["t_start"] if rec is not None else float(mv.times[0])
-            detail = f"{mv.command} {mv.detail}: {len(mv.times)} frames, {end - start:.6g} s"
-            t_ev = end
-            if cut and end > now + TIME_EPS:
-                t_ev = now
-                detail += f"; stopped at until ({now:.6g} s)"
-                if rec is not None:
-                    rec["duration_s"] = max(now - rec["t_start"], 0.0)
-                    rec["note"] = "stopped at until"
-            sim.timeline.add_event(t_ev, mv.robot, "move", detail, data=rec)
-            pend = sim._pending.get(mv.robot)
-            if pend is not None and pend.block_move == i:
-                sim._pending.pop(mv.robot)
-            self.block.moves[i] = dataclasses.replace(mv, times=mv.times[-1:], rows=mv.rows[-1:])
-
     # ------------------------------------------------------------------ the end
     def _deadlock(self) -> str:
         values = self.sim._logic.values if self.sim._logic is not None else {}
@@ -535,30 +345,6 @@ class Run:
             f"running waits for a signal that nothing can change any more (no robot moves, no "
             f"belt moves a part, no source is due): {'; '.join(waits)}"
         )
-
-    def _stop_at_until(self) -> None:
-        sim, now = self.sim, self.sim.sim_time
-        running = []
-        for p in self.programs:
-            if p.state in ("done", "failed"):
-                continue
-            what = {"time": "waiting", "signal": "waiting for a signal", "robot": "moving"}
-            running.append(f"'{p.name}' ({what.get(p.state, p.state)})")
-            if p.state in ("time", "signal"):
-                command = "wait" if p.state == "time" else "wait_signal"
-                rec = sim._command_record(p.robot, command, p.since, now - p.since, "wait")
-                rec.update(program_name=p.name, note="stopped at until")
-                if p.waits_for is not None:
-                    rec.update(signal=p.waits_for[0], value=p.waits_for[1])
-                sim.timeline.add_event(
-                    now, p.robot, command, f"{command}: stopped at until", data=rec
-                )
-            p.t_end = now
-        self._finish_moves(now, cut=True)
-        sim.timeline.add_event(
-            now, None, "stop",
-            f"run_programs: until {now:.6g} s reached; still running: {', '.join(running) or 'none'}",
-        )  # fmt: skip
 
     def _stop_all(self) -> None:
         """Unwind every program thread still waiting for control."""
@@ -598,13 +384,3 @@ class Run:
                 self.sim.sim_time, robot, "error", f"{type(exc).__name__}: {exc}"
             )
         return exc
-
-
-def _merged(parts: list[Array], now: float, end: float) -> Array:
-    """The sorted times of ``parts`` in (now, end], those closer than TIME_EPS as one,
-    the last exactly ``end``."""
-    times = np.unique(np.concatenate(parts))
-    times = times[times > now + TIME_EPS]
-    times = times[np.concatenate([np.diff(times) > TIME_EPS, [True]])]
-    times[-1] = end
-    return times

@@ -53,8 +53,8 @@ class PlannedMove:
 @dataclass
 class _Block:
     """Motions planned but not run yet: a ``concurrently()`` block (``run_programs`` keeps
-    one too, :mod:`workcell.logic.scheduler`, whose ``refuse``, ``clock`` and ``add`` go
-    their own way)."""
+    one too, :mod:`workcell.logic.block`, whose ``refuse``, ``clock`` and ``add`` go their
+    own way)."""
 
     start: float
     base: Array  # qpos when the block started
