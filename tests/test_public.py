@@ -198,6 +198,8 @@ MODULES = [
     "workcell.study.runner",
     "workcell.study.cli",
     "workcell.cell.devices",
+    "workcell.cell.device_types",
+    "workcell.cell.device_json",
     "workcell.cell.compile_devices",
     "workcell.sim.devices",
     "workcell.sim.signals",

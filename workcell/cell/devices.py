@@ -37,14 +37,14 @@ positions in world coordinates.
 
 Names are cell names, unique across everything the cell holds (a sensor's signal has the
 sensor's name). A failed ``add_*`` changes nothing. :func:`devices_to_dict` and
-:func:`device_sections` are the JSON form (:mod:`workcell.cell.cell_json`).
+:func:`device_sections` are the JSON form (:mod:`workcell.cell.cell_json`). The devices as
+values: :mod:`workcell.cell.device_types`; their JSON: :mod:`workcell.cell.device_json`
+(both importable from here).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
@@ -52,6 +52,27 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell import limits
+from workcell.cell.device_json import device_sections, devices_to_dict
+from workcell.cell.device_types import (
+    BELT_THICKNESS,
+    DEVICE_KINDS,
+    MAX_SPEED,
+    SENSOR_KINDS,
+    SENSOR_PARAMETERS,
+    STOP_HEIGHT,
+    STOP_THICKNESS,
+    TIME_EPS,
+    Conveyor,
+    Sensor,
+    Signal,
+    SignalValue,
+    Sink,
+    Source,
+    check_signal_value,
+    copy_names,
+    format_value,
+    same_value,
+)
 from workcell.checks import is_finite_number, shown
 from workcell.errors import GeometryError, ModelError
 from workcell.spatial import as_transform, translation
@@ -81,21 +102,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-SignalValue = bool | int | float
-SENSOR_KINDS = ("beam", "presence", "proximity")
-SENSOR_PARAMETERS: Mapping[str, tuple[str, ...]] = MappingProxyType(
-    {
-        "beam": ("start", "end"),
-        "presence": ("center", "size"),
-        "proximity": ("origin", "direction", "range", "threshold"),
-    }
-)
-DEVICE_KINDS = ("signal", "sensor", "conveyor", "source", "sink")
-BELT_THICKNESS = 0.02  # m: the belt slab under the top surface
-STOP_THICKNESS = 0.01  # m: the end stop plate, along the belt
-STOP_HEIGHT = 0.03  # m: how far the end stop rises above the belt
-MAX_SPEED = 10.0  # m/s: the fastest belt
-TIME_EPS = 1e-9  # s: simulated times closer than this are one time
 
 
 def _vec3(value: object, what: str) -> Array:
@@ -124,123 +130,10 @@ def _sizes(value: object, what: str) -> Array:
     return v
 
 
-def check_signal_value(value: object, what: str) -> SignalValue:
-    """``value`` as a signal value (a bool, an int or a finite float; numpy scalars become
-    Python ones), else ModelError."""
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)) and math.isfinite(float(value)):
-        return float(value)
-    raise ModelError(f"{what} must be a bool, an int or a finite float, got {shown(value)}")
-
-
-def format_value(v: object) -> str:
-    """A signal value as people read it: true/false, 3, 0.25."""
-    if isinstance(v, (bool, np.bool_)):
-        return "true" if v else "false"
-    return f"{v:.6g}" if isinstance(v, float) else str(v)
-
-
-def same_value(a: object, b: object) -> bool:
-    """Whether two signal values are equal (a bool equals only a bool)."""
-    return a == b and isinstance(a, bool) == isinstance(b, bool)
-
-
 def _read_only(a: Array) -> Array:
     a = np.array(a, dtype=np.float64)
     a.flags.writeable = False
     return a
-
-
-@dataclass(frozen=True)
-class Signal:
-    """A named value of the cell: ``initial`` is a bool, an int or a float, and its type is
-    the signal's kind (:attr:`kind`)."""
-
-    name: str
-    initial: SignalValue
-
-    @property
-    def kind(self) -> str:
-        """``"bool"``, ``"int"`` or ``"float"``."""
-        return type(self.initial).__name__
-
-
-@dataclass(frozen=True, eq=False)
-class Sensor:
-    """A sensor (module doc): ``kind`` one of :data:`SENSOR_KINDS`, its ``params`` by name
-    (points and vectors as read-only (3,) arrays, m; ``direction`` a unit vector), and
-    ``robots``: robot links break its beam or ray, a robot's tool point enters its box."""
-
-    name: str
-    kind: str
-    params: Mapping[str, Any]
-    robots: bool = False
-
-
-@dataclass(frozen=True, eq=False)
-class Conveyor:
-    """A belt (module doc): top surface centre line ``start`` -> ``end`` (m, world, at one
-    height), ``width`` (m), ``speed`` (m/s) and the bool ``run_signal`` (None: always
-    running). :attr:`direction` is the unit vector start -> end, :attr:`length` (m) and
-    :attr:`top` (m, the belt's height) follow."""
-
-    name: str
-    start: Array
-    end: Array
-    width: float
-    speed: float
-    run_signal: str | None = None
-
-    @property
-    def direction(self) -> Array:
-        d = self.end - self.start
-        return d / np.linalg.norm(d)
-
-    @property
-    def length(self) -> float:
-        return float(np.linalg.norm(self.end - self.start))
-
-    @property
-    def top(self) -> float:
-        return float(self.start[2])
-
-
-@dataclass(frozen=True, eq=False)
-class Source:
-    """A part source (module doc): copies of movable part ``part`` at world pose ``at``
-    (4x4 of the part frame), every ``every`` s or on rising edges of ``on_signal``, at most
-    ``count`` (None: the pool limit); ``pool``: how many copies it can make (``count``, or
-    ``max_part_copies`` when it was added). :attr:`copies` are their names."""
-
-    name: str
-    part: str
-    at: Array
-    every: float | None = None
-    count: int | None = None
-    on_signal: str | None = None
-    pool: int = field(default=1)
-
-    @property
-    def copies(self) -> tuple[str, ...]:
-        return copy_names(self.part, self.pool)
-
-
-@dataclass(frozen=True, eq=False)
-class Sink:
-    """A sink: a box on the world axes (``center``, full edge ``size``, m) that removes and
-    counts the parts whose centroid enters it."""
-
-    name: str
-    center: Array
-    size: Array
-
-
-def copy_names(part: str, n: int) -> tuple[str, ...]:
-    """The names of a source's first ``n`` copies of ``part``: ``part_1`` ... ``part_n``."""
-    return tuple(f"{part}_{k}" for k in range(1, n + 1))
 
 
 class DeviceItems:
@@ -525,89 +418,3 @@ class DeviceItems:
             "source": self._sources,
             "sink": self._sinks,
         }[kind].pop(name)
-
-
-# ---------------------------------------------------------------------- JSON
-def devices_to_dict(cell: DeviceItems) -> dict[str, list[dict[str, Any]]]:
-    """The devices as JSON-able lists (lengths m, speeds m/s, times s); a kind the cell
-    has none of is left out."""
-
-    def plain(v: Any) -> Any:
-        return v.tolist() if isinstance(v, np.ndarray) else v
-
-    out = {
-        "signals": [{"name": s.name, "initial": s.initial} for s in cell.signals.values()],
-        "sensors": [
-            {
-                "name": s.name,
-                "kind": s.kind,
-                "robots": s.robots,
-                **{k: plain(v) for k, v in s.params.items()},
-            }
-            for s in cell.sensors.values()
-        ],
-        "conveyors": [
-            {
-                "name": c.name,
-                "start": c.start.tolist(),
-                "end": c.end.tolist(),
-                "width": c.width,
-                "speed": c.speed,
-                "run_signal": c.run_signal,
-            }
-            for c in cell.conveyors.values()
-        ],
-        "sources": [
-            {
-                "name": s.name,
-                "part": s.part,
-                "at": s.at.tolist(),
-                "every": s.every,
-                "count": s.count,
-                "on_signal": s.on_signal,
-            }
-            for s in cell.sources.values()
-        ],
-        "sinks": [
-            {"name": s.name, "center": s.center.tolist(), "size": s.size.tolist()}
-            for s in cell.sinks.values()
-        ],
-    }
-    return {k: v for k, v in out.items() if v}  # a cell without devices: as before
-
-
-def device_sections(cell: DeviceItems) -> list[tuple[str, Callable[[dict[str, Any]], object]]]:
-    """(JSON key, how to add one entry) for each kind of device of :func:`devices_to_dict`,
-    signals first (the others name them): :mod:`workcell.cell.cell_json` reads them."""
-
-    def sensor(e: dict[str, Any]) -> Sensor:
-        params = {k: v for k, v in e.items() if k not in ("name", "kind", "robots")}
-        return cell.add_sensor(e["name"], e["kind"], robots=e.get("robots", False), **params)
-
-    return [
-        ("signals", lambda e: cell.add_signal(e["name"], e["initial"])),
-        ("sensors", sensor),
-        (
-            "conveyors",
-            lambda e: cell.add_conveyor(
-                e["name"],
-                start=e["start"],
-                end=e["end"],
-                width=e["width"],
-                speed=e["speed"],
-                run_signal=e.get("run_signal"),
-            ),
-        ),
-        (
-            "sources",
-            lambda e: cell.add_source(
-                e["name"],
-                e["part"],
-                at=e["at"],
-                every=e.get("every"),
-                count=e.get("count"),
-                on_signal=e.get("on_signal"),
-            ),
-        ),
-        ("sinks", lambda e: cell.add_sink(e["name"], center=e["center"], size=e["size"])),
-    ]
