@@ -202,6 +202,7 @@ MODULES = [
     "workcell.cell.device_json",
     "workcell.cell.compile_devices",
     "workcell.sim.devices",
+    "workcell.sim.sensors",
     "workcell.sim.signals",
     "workcell.sim.throughput",
     "workcell.sim.physics_devices",
