@@ -169,6 +169,7 @@ MODULES = [
     "workcell.robotprog.urscript_run",
     "workcell.robotprog.cli",
     "workcell.client",
+    "workcell.client_link",
     "workcell.record",
     "workcell.record.render",
     "workcell.record.gl",

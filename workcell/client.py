@@ -27,10 +27,8 @@ thesis's programs end on an error; the connection stays usable.
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import socket
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from typing import Any
@@ -39,16 +37,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workcell.cell.workcell import Workcell
-from workcell.errors import ProtocolError, WorkcellError
-from workcell.program.protocol import (
-    DEFAULT_PORT,
-    MAX_MESSAGE_BYTES,
-    PROTOCOL,
-    VERSION,
-    encode,
-    error_class,
-    to_jsonable,
-)
+from workcell.client_link import ServerLink
+from workcell.errors import WorkcellError
+from workcell.program.protocol import to_jsonable
 from workcell.sim.timeline import Event, Events
 
 __all__ = ["Client"]
@@ -70,8 +61,9 @@ _KEEPS_CELL = frozenset(
 )  # fmt: skip
 
 
-class Client:
-    """A connection to a workcell server (see the module doc).
+class Client(ServerLink):
+    """A connection to a workcell server (see the module doc; the connection itself:
+    :mod:`workcell.client_link`).
 
     ``token``: sent in the hello; when None and the server asks for one, the
     ``WORKCELL_TOKEN`` environment variable, else (for a server on this machine) its
@@ -79,61 +71,7 @@ class Client:
     ``timeout`` (s): for connecting and for each reply (None: wait as long as it takes).
     """
 
-    def __init__(
-        self,
-        host: str = "127.0.0.1",
-        port: int = DEFAULT_PORT,
-        *,
-        token: str | None = None,
-        timeout: float | None = None,
-    ) -> None:
-        try:
-            self._sock = socket.create_connection((host, port), timeout=timeout)
-        except OSError as exc:
-            raise ProtocolError(f"cannot connect to {host}:{port}: {exc.strerror or exc}") from exc
-        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self._r = self._sock.makefile("rb")
-        self._next_id = 0
-        self._cell: Workcell | None = None
-        self.server_hello = self._read()
-        err = self.server_hello.get("error")
-        if isinstance(err, dict):  # refused at once (busy): say why
-            self.close()
-            raise error_class(err.get("type"))(str(err.get("message")))
-        if self.server_hello.get("protocol") != PROTOCOL:
-            self.close()
-            raise ProtocolError(f"{host}:{port} does not speak the workcell protocol")
-        if self.server_hello.get("version") != VERSION:
-            self.close()
-            raise ProtocolError(
-                f"server speaks protocol version {self.server_hello.get('version')}, "
-                f"this client {VERSION}"
-            )
-        if token is None and self.server_hello.get("token_required"):
-            token = _local_token(host, port)
-            if token is None:
-                self.close()
-                raise ProtocolError(
-                    f"the server at {host}:{port} needs a token: pass token=..., set "
-                    "WORKCELL_TOKEN, or run on the server's machine as its user (token file)"
-                )
-        self.call("hello", version=VERSION, token=token)  # required before any command
-
-    # ------------------------------------------------------------------ plumbing
-    def _read(self) -> dict[str, Any]:
-        line = self._r.readline(MAX_MESSAGE_BYTES + 1)
-        if not line:
-            raise ProtocolError("the server closed the connection")
-        if len(line) > MAX_MESSAGE_BYTES:
-            self.close()
-            raise ProtocolError(f"the server sent a message over {MAX_MESSAGE_BYTES} bytes")
-        try:
-            msg = json.loads(line)
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise ProtocolError(f"the server sent malformed JSON: {exc}") from exc
-        if not isinstance(msg, dict):
-            raise ProtocolError("the server sent something other than a JSON object")
-        return msg
+    _cell: Workcell | None = None  # the session's cell as last fetched (None: fetch it)
 
     def call(self, command: str, /, *args: Any, **kwargs: Any) -> Any:
         """Send one command (arguments in order, or by name, not both) and return its result.
@@ -144,38 +82,7 @@ class Client:
             raise WorkcellError("give a command's arguments in order or by name, not both")
         if command not in _KEEPS_CELL:
             self._cell = None  # the cell may change: fetch it again when asked
-        self._next_id += 1
-        rid = self._next_id
-        data = encode({"id": rid, "command": command, "args": list(args) if args else kwargs})
-        if len(data) > MAX_MESSAGE_BYTES:
-            raise ProtocolError(
-                f"request of {len(data)} bytes is over the {MAX_MESSAGE_BYTES} limit"
-            )
-        try:
-            self._sock.sendall(data)
-        except OSError as exc:
-            raise ProtocolError(f"connection lost: {exc}") from exc
-        reply = self._read()
-        if "error" in reply:
-            err = reply["error"] if isinstance(reply["error"], dict) else {}
-            raise error_class(err.get("type"))(str(err.get("message", "error without a message")))
-        if reply.get("id") != rid:
-            raise ProtocolError(f"reply to request {reply.get('id')!r}, expected {rid}")
-        return reply.get("result")
-
-    def close(self) -> None:
-        """Close the connection (idempotent)."""
-        try:
-            self._r.close()
-            self._sock.close()
-        except OSError:
-            pass
-
-    def __enter__(self) -> Client:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+        return self._request(command, list(args) if args else kwargs)
 
     def __getattr__(self, name: str) -> Any:
         from workcell.program.base import COMMANDS
@@ -497,17 +404,6 @@ class Client:
     def example_cell(self, name: str) -> str:
         """Load one of the thesis's example cells: "joints", "pick-place", "handoff"."""
         return self.call("example_cell", name=name)
-
-
-def _local_token(host: str, port: int) -> str | None:
-    """WORKCELL_TOKEN, else the token file of a server on this machine (never sent to
-    another machine's server)."""
-    from workcell.program.tokens import is_loopback, read_token_file
-
-    env = os.environ.get("WORKCELL_TOKEN")
-    if env:
-        return env
-    return read_token_file(port) if is_loopback(host) else None
 
 
 def _plain_value(v: Any) -> Any:
