@@ -45,6 +45,7 @@ MODULES = [
     "workcell.robots.geometry",
     "workcell.robots.gripper",
     "workcell.robots.ik_closed",
+    "workcell.robots.ik_family",
     "workcell.robots.ik_refine",
     "workcell.robots.ik_numeric",
     "workcell.robots.ik_common",
