@@ -220,6 +220,7 @@ MODULES = [
     "workcell.record.devices",
     "workcell.record.rr_devices",
     "workcell.record.conveyor_demo",
+    "workcell.record.demo_files",
     "workcell.examples.conveyor",
 ]
 

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workcell.examples.conveyor import build, run
+from workcell.record.demo_files import write_asked
 from workcell.sim.simulator import Simulator
 
 __all__ = ["demo", "picture"]
@@ -64,19 +65,10 @@ def demo(
         out["physics"] = result.summary().get("physics")
     tp = out["throughput"]
     placed = tp["signals"]["placed"]
-    if render:
-        from workcell.record.render import save_png
-
-        out["png"] = str(save_png(picture(sim), render))
-    if save:
-        from workcell.record import record
-
-        stats = record(result, save, progress=None if as_json else True, fps=record_fps)
-        out["rrd"] = str(stats.path)
-    if mjcf:
-        from workcell.cell import export_cell
-
-        out["mjcf"] = str(export_cell(build(), mjcf))
+    write_asked(
+        out, render=render, picture=lambda: picture(sim), save=save, recorded=result,
+        mjcf=mjcf, build=build, quiet=as_json, fps=record_fps,
+    )  # fmt: skip
     if as_json:
         print(json.dumps(out))
         return 0

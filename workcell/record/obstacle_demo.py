@@ -23,6 +23,7 @@ from workcell.examples.obstacle import (
     compare,
     tool_path,
 )
+from workcell.record.demo_files import write_asked
 
 if TYPE_CHECKING:
     from workcell.sim.simulator import Simulator
@@ -66,18 +67,10 @@ def demo(
         "planned": planned.summary(),
         "collisions": {"direct": len(hits), "planned": planned.summary()["collisions"]},
     }
-    if render:
-        from workcell.record.render import save_png
-
-        out["png"] = str(save_png(picture(direct, planned), render))
-    if save:
-        from workcell.record import record
-
-        out["rrd"] = str(record(planned, save, progress=None if as_json else True).path)
-    if mjcf:
-        from workcell.cell import export_cell
-
-        out["mjcf"] = str(export_cell(build(), mjcf))
+    write_asked(
+        out, render=render, picture=lambda: picture(direct, planned), save=save,
+        recorded=planned, mjcf=mjcf, build=build, quiet=as_json,
+    )  # fmt: skip
     if as_json:
         print(json.dumps(out))
         return 0
