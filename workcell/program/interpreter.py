@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from workcell.errors import ProgramError, WorkcellError
 from workcell.files import read_text
@@ -22,9 +22,17 @@ from workcell.program.format import format_result
 from workcell.program.keytree import CommandSyntaxError
 from workcell.program.language import Meta, help_text, parse_line
 from workcell.program.lexer import split_lines
+from workcell.program.runcommands import Simulate, StopSimulation
 from workcell.program.session import Session
 
-__all__ = ["Interpreter", "QuitRequest", "check_script", "run_script"]
+__all__ = [
+    "Interpreter",
+    "QuitRequest",
+    "ScriptSplit",
+    "check_script",
+    "run_script",
+    "split_at_simulate",
+]
 
 
 class QuitRequest(Exception):  # noqa: N818 - a request, not an error
@@ -100,6 +108,31 @@ def check_script(text: str, name: str = "<script>") -> int:
         except WorkcellError as exc:
             raise _locate(exc, f"{name}:{i}: ", line) from None
     return n
+
+
+class ScriptSplit(NamedTuple):
+    """A script cut at its first ``simulate`` command (:func:`split_at_simulate`)."""
+
+    lines: list[tuple[int, str]]  # (line number from 1, text): every line of the script
+    at: int  # the line of the first simulate command (0: none)
+    simulate: Simulate | None  # that command (its mode and dt)
+    again: int  # the first line after it that starts or stops a simulation (0: none)
+
+
+def split_at_simulate(text: str) -> ScriptSplit:
+    """Where the script ``text`` (its syntax checked: :func:`check_script`) starts its
+    simulation, and where it starts or stops another after that: the lines before and at
+    ``at`` build or load the cell, those after it run on the simulation."""
+    lines = list(enumerate(split_lines(text), 1))
+    at, first = 0, None
+    for i, line in lines:
+        commands = list(parse_line(line))
+        sims = [c for c in commands if isinstance(c, Simulate)]
+        if sims and not at:
+            at, first = i, sims[0]
+        elif at and any(isinstance(c, (Simulate, StopSimulation)) for c in commands):
+            return ScriptSplit(lines, at, first, i)
+    return ScriptSplit(lines, at, first, 0)
 
 
 def run_script(

@@ -35,29 +35,24 @@ def _run_on_cell(program: str, cell: Any) -> Any:
     (path, 0.01 s without one); returns the simulator."""
     from workcell.errors import ProgramError
     from workcell.files import read_text
-    from workcell.program.interpreter import Interpreter, check_script
-    from workcell.program.language import parse_line
+    from workcell.program.interpreter import Interpreter, check_script, split_at_simulate
     from workcell.program.session import Session
-    from workcell.program.simcommands import Simulate, StopSimulation
     from workcell.sim import Simulator
 
     text = read_text(program)
     check_script(text, program)
-    lines = list(enumerate(text.splitlines(), 1))
-    mode, dt, first = "path", 0.01, 0
-    for i, line in lines:
-        commands = list(parse_line(line))
-        sims = [c for c in commands if isinstance(c, Simulate)]
-        if sims and not first:
-            first, mode, dt = i, sims[0].mode, sims[0].dt
-        elif first and any(isinstance(c, (Simulate, StopSimulation)) for c in commands):
-            raise ProgramError(
-                f"{program}:{i}: export-program runs one simulation; this line starts or stops another"
-            )
+    split = split_at_simulate(text)
+    if split.again:
+        raise ProgramError(
+            f"{program}:{split.again}: export-program runs one simulation; this line starts or "
+            "stops another"
+        )
+    first = split.simulate
+    mode, dt = ("path", 0.01) if first is None else (first.mode, first.dt)
     sim = Simulator(cell, mode=mode, dt=dt)
     interp = Interpreter(Session(sim=sim, base_dir=Path(program).parent), lambda text: None)
-    for i, line in lines:
-        if i > first:
+    for i, line in split.lines:
+        if i > split.at:
             interp.run_line(line, f"{program}:{i}: ")
     return sim
 

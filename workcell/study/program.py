@@ -90,9 +90,7 @@ class ScriptProgram(Program):
     @classmethod
     def read(cls, path: str | os.PathLike) -> ScriptProgram:
         """Read and check the script at ``path``; StudyError or the syntax error otherwise."""
-        from workcell.program.interpreter import check_script
-        from workcell.program.language import parse_line
-        from workcell.program.simcommands import Simulate, StopSimulation
+        from workcell.program.interpreter import check_script, split_at_simulate
 
         p = Path(path)
         if p.suffix != ".wcl":
@@ -100,22 +98,16 @@ class ScriptProgram(Program):
         text = read_text(p, what="program", error=StudyError)
         check_script(text, str(p))
         prog = cls(str(p), text, str(p.parent.resolve()))
-        lines = list(enumerate(text.splitlines(), 1))
-        split = 0
-        for i, line in lines:
-            commands = list(parse_line(line))
-            sims = [c for c in commands if isinstance(c, Simulate)]
-            if sims and not split:
-                split = i
-                prog.mode, prog.dt = sims[0].mode, sims[0].dt
-                continue
-            if split and any(isinstance(c, (Simulate, StopSimulation)) for c in commands):
-                raise StudyError(
-                    f"{p}:{i}: a study's program runs on the study's simulator: it may start "
-                    f"one simulation (line {split}) before its motion commands, and no other"
-                )
-        prog.setup = [(i, ln) for i, ln in lines if i <= split]
-        prog.body = [(i, ln) for i, ln in lines if i > split]
+        split = split_at_simulate(text)
+        if split.again:
+            raise StudyError(
+                f"{p}:{split.again}: a study's program runs on the study's simulator: it may "
+                f"start one simulation (line {split.at}) before its motion commands, and no other"
+            )
+        if split.simulate is not None:
+            prog.mode, prog.dt = split.simulate.mode, split.simulate.dt
+        prog.setup = [(i, ln) for i, ln in split.lines if i <= split.at]
+        prog.body = [(i, ln) for i, ln in split.lines if i > split.at]
         return prog
 
     def __getstate__(self) -> dict[str, Any]:
