@@ -110,3 +110,24 @@ def test_the_instruction_list_of_a_planned_and_task_level_program(tmp_path: Path
     assert np.allclose(again.joints("r"), sim.joints("r"), atol=1e-6)
     # a straight line without a tool speed is written at the trapezoid taking its time
     assert again.sim_time == pytest.approx(sim.sim_time, rel=0.05)
+
+
+def test_a_jog_exports_as_a_joint_move_to_the_jogged_joints(tmp_path: Path) -> None:
+    """A jog (the live view's joint inputs and gizmo) changes joints with no time passing;
+    a real robot cannot jump, so the exported program moves there (a joint move to the
+    jogged joints) before what followed, and the file run back reaches every target."""
+    sim = _sim("ur5e", "jerk")
+    q0 = np.radians(FAMILIES["ur5e"][0])
+    sim.move_joints_absolute("r", q0)
+    jogged = q0 + np.radians([15, -10, 5, 0, 20, 0])
+    sim.jog("r", jogged)
+    sim.move_linear("r", translation(0.05, 0, 0) @ sim.tool_pose("r"), speed=0.2)
+    kinds = [type(i).__name__ for i in from_sim(sim, "r").instructions]
+    assert kinds == ["MoveJoint", "MoveJoint", "MoveJoint", "MoveLinear"]
+    assert np.abs(from_sim(sim, "r").instructions[2].q - jogged).max() < 1e-12
+    path = export(sim, "r", tmp_path / "jog.src")[0]
+    again = _sim("ur5e", "jerk")
+    load(path).run(again, "r")
+    assert np.abs(again.joints("r") - sim.joints("r")).max() < 1e-6
+    # the jog's move takes time on the robot (the simulation's jog took none)
+    assert again.sim_time > sim.sim_time

@@ -3,7 +3,9 @@
 
 ``Simulator.jog(robot, q)`` puts the robot's joints at ``q`` (rad/m) with no simulated
 time passing: one frame at the current time (a part the robot holds moves with its
-gripper; contacts are checked as for any frame) and a ``jog`` event. A target outside
+gripper; contacts are checked as for any frame) and a ``jog`` event, whose data says
+what an exported robot program does there (a joint move to ``q``: a real robot cannot
+jump; :mod:`workcell.robotprog`). A target outside
 the joint limits raises :class:`~workcell.errors.JointLimitError` naming the joint and its
 range, and changes nothing. The live view (:mod:`workcell.view`) calls it for its joint
 inputs and its tool gizmo.
@@ -42,4 +44,13 @@ class JogCommands:
             shown = np.where(revolute, np.degrees(target), target * 1e3)
             text = ", ".join(f"{v:.6g}" for v in shown)
             unit = "deg" if all(revolute) else "deg/mm"
-            self.timeline.add_event(self.sim_time, name, "jog", f"jog to ({text}) {unit}")
+            # what an exported robot program does here: a joint move to the jogged joints
+            # (:mod:`workcell.robotprog`); not a timed command (no cycle-time record)
+            asked = {"kind": "joint", "q": target.tolist(), "zone": 0.0, "jog": True}
+            rec = {
+                "robot": name,
+                "t_start": self.sim_time,
+                "duration_s": 0.0,
+                "program": self._program_settings(name, asked),
+            }
+            self.timeline.add_event(self.sim_time, name, "jog", f"jog to ({text}) {unit}", data=rec)

@@ -91,6 +91,7 @@ class Viewer:
         self._resume = threading.Condition()
         self._anchor: tuple[float, float] | None = None  # (wall, sim time) of pacing
         self._last_push = 0.0
+        self._shown_at: tuple[int, float] | None = None  # the (frame, t) the page shows
         self._last_frame = 0.0
         self._own = False  # the page's own jog is running (its frames are not 'busy')
         self._commands = 0  # commands of a followed session running now
@@ -151,6 +152,7 @@ class Viewer:
             panel.remove()
         self._panels = []
         self.sim = sim
+        self._shown_at = None
         self.server.scene.reset()
         self.server.scene.set_up_direction("+z")
         # plain lights (no environment map to load and fade in): steady colours at once
@@ -364,6 +366,7 @@ class Viewer:
         self.scene.show(d, touching)
         live = live or data is None
         self._scrubbed = None if live else frame
+        self._shown_at = (frame, t)
         self._last_push = time.perf_counter()
         self.pushes += 1
         with self.server.atomic():
@@ -377,8 +380,10 @@ class Viewer:
         if sim is None:
             self.status.content = "no simulation yet"
             return
+        if frame is None:  # what the page shows (a command's frames join the timeline at
+            # its end: the timeline's last frame lags behind the live one while it runs)
+            frame, t = self._shown_at or (len(sim.timeline) - 1, sim.sim_time)
         t = sim.sim_time if t is None else t
-        frame = len(sim.timeline) - 1 if frame is None else frame
         state = "paused" if self._paused else ("running" if self.busy else "idle")
         if self._scrubbed is not None:
             state = "timeline (scrubbing)"
