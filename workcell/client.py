@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from workcell.cell.workcell import Workcell
 from workcell.client_link import ServerLink
-from workcell.errors import WorkcellError
+from workcell.errors import ProgramError, WorkcellError
 from workcell.program.protocol import to_jsonable
 from workcell.sim.timeline import Event, Events
 
@@ -79,7 +79,7 @@ class Client(ServerLink):
         Raises the WorkcellError subclass the server names on an error reply.
         """
         if args and kwargs:
-            raise WorkcellError("give a command's arguments in order or by name, not both")
+            raise ProgramError("give a command's arguments in order or by name, not both")
         if command not in _KEEPS_CELL:
             self._cell = None  # the cell may change: fetch it again when asked
         return self._request(command, list(args) if args else kwargs)
@@ -220,7 +220,9 @@ class Client(ServerLink):
         approach: float = 0.08,
     ) -> None:
         """Put the held ``part`` down resting on ``on``, centroid over ``position`` (x, y m)."""
-        pos = None if position is None else _list(np.asarray(position, dtype=np.float64)[:2])
+        pos = None if position is None else _list(position)
+        if isinstance(pos, list) and len(pos) > 2 and all(isinstance(v, float) for v in pos):
+            pos = pos[:2]  # (x, y) of a point (3,): as Simulator.place takes it
         self.call("place", robot=robot, part=part, on=on, position=pos, approach=approach)
 
     def handover(self, giver: str, receiver: str, part: str, *, approach: float = 0.08) -> None:
@@ -339,11 +341,12 @@ class Client(ServerLink):
         controller's) to ``.wcl`` files in the server's folder (Python functions do not
         travel: run them in-process, or send their commands one by one)."""
         if not isinstance(programs, dict):
-            raise WorkcellError("run_programs: programs must be a dict of names to .wcl files")
+            raise ProgramError(
+                "run_programs: programs must be a dict of names to .wcl files, got "
+                f"{type(programs).__name__}"
+            )
         for name, body in programs.items():
             if not isinstance(body, (str, os.PathLike)):
-                from workcell.errors import ProgramError
-
                 raise ProgramError(
                     f"run_programs over the network: program '{name}' must be a .wcl file on "
                     f"the server, got {type(body).__name__} (Python functions run in-process)"

@@ -9,6 +9,7 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -116,7 +117,39 @@ CASES = [
         "the cell has no signal of that name",
     ),
     ("a.ls", LS_HEAD + "   1:  R[1]=1 \n/POS\n/END\n", 4, 14, "';'"),
+    (
+        "a.ls",
+        LS_HEAD + "   1:  J P[1] 50% FINE ;\n/POS\nP[1]{\n GP1:\n UF : 0, UT : 0,\n"
+        " X = 1 mm, Y = 2 mm, Z = 3 mm, W = 0 deg, P = 0 deg, R = 0 deg\n};\nP[1]{\n GP1:\n"
+        " UF : 0, UT : 0,\n X = 1 mm, Y = 2 mm, Z = 3 mm, W = 0 deg, P = 0 deg, R = 0 deg\n};\n/END\n",
+        11,
+        1,
+        "P[1] is defined twice",
+    ),
+    (
+        "a.src",
+        "DEF a( )\n  DECL INT X\n  X = 2\n  FOR I = 1 TO 3 STEP -X\n  ENDFOR\nEND\n",
+        4,
+        23,
+        "STEP must be a constant number",
+    ),
+    ("a.src", "DEF a( )\n  $OV_PRO = 150\nEND\n", 2, 3, "it must be in (0, 100] %"),
 ]
+
+
+def test_a_krl_loop_with_a_negative_step_counts_down(tmp_path: Path) -> None:
+    """FOR I = 3 TO 1 STEP -1 runs I = 3, 2, 1: the axis 1 targets 30, 20, 10 deg."""
+    path = tmp_path / "down.src"
+    path.write_text(
+        "DEF down( )\n  DECL INT I\n  FOR I = 3 TO 1 STEP -1\n"
+        "    PTP {A1 10*I, A2 -90, A3 90, A4 0, A5 0, A6 0}\n  ENDFOR\nEND\n"
+    )
+    cell = Workcell("e")
+    cell.add_robot("r", ROBOT[".src"], gripper=True)
+    sim = Simulator(cell, profile="jerk", check_collisions=False)
+    load(path).run(sim, "r")
+    ends = [e.data["program"]["q"][0] for e in sim.events() if (e.data or {}).get("program")]
+    assert np.degrees(ends) == pytest.approx([30, 20, 10], abs=1e-9)
 
 
 @pytest.mark.parametrize(("name", "text", "line", "col", "words"), CASES)

@@ -131,3 +131,12 @@ def test_a_jog_exports_as_a_joint_move_to_the_jogged_joints(tmp_path: Path) -> N
     assert np.abs(again.joints("r") - sim.joints("r")).max() < 1e-6
     # the jog's move takes time on the robot (the simulation's jog took none)
     assert again.sim_time > sim.sim_time
+
+
+def test_a_path_without_a_suffix_gets_the_languages(tmp_path: Path) -> None:
+    sim = _sim("kuka_kr6_r700", "jerk")
+    sim.move_joints_absolute("r", np.radians(FAMILIES["kuka_kr6_r700"][0]))
+    paths = export(sim, "r", tmp_path / "sub" / "prog", language="krl")
+    assert paths == [str(tmp_path / "sub" / "prog.src"), str(tmp_path / "sub" / "prog.dat")]
+    assert all(Path(p).is_file() for p in paths)
+    assert sorted(p.name for p in (tmp_path / "sub").iterdir()) == ["prog.dat", "prog.src"]

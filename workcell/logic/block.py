@@ -32,6 +32,8 @@ class ProgramBlock:
         self.run.sync()
 
     def clock(self, sim: Simulator, robot: str) -> float:
+        """The simulated time (s) at which ``robot``'s next move starts: after its moves
+        already planned, never before now."""
         return max(self.clocks.get(robot, sim.sim_time), sim.sim_time)
 
     def add(self, sim: Simulator, move: Any) -> None:

@@ -40,6 +40,7 @@ class RunClock:
         return any(self.flight.values())
 
     def _move_end(self, i: int) -> float:
+        """The simulated time (s) at which move ``i`` of the block ends."""
         return float(self.block.moves[i].times[-1])
 
     def _next_time(self) -> float:

@@ -268,7 +268,7 @@ class Run(RunClock):
         self.sync()
 
     def wait(self, seconds: float) -> None:
-        """``wait`` in a program: time passes for it alone."""
+        """``wait`` of ``seconds`` (s) in a program: time passes for it alone."""
         p, sim = self.current, self.sim
         assert p is not None
         t0 = sim.sim_time

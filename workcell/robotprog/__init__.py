@@ -15,6 +15,7 @@ from typing import Any
 
 from workcell import limits
 from workcell.errors import ProgramError, WorkcellError
+from workcell.files import atomic_write_text, make_folder
 from workcell.robotprog import fanuc, krl, rapid, urscript
 from workcell.robotprog.instructions import Program, from_sim
 from workcell.robotprog.runtime import VM, RobotProgram
@@ -58,17 +59,20 @@ def export(
     signals: Mapping[str, int] | None = None,
 ) -> list[str]:
     """Write ``robot``'s program as it ran in ``sim`` to ``path`` in ``language``
-    (default: from the suffix, :data:`SUFFIXES`); KRL also writes the ``.dat`` beside the
-    ``.src``. ``signals`` maps signal names (``"gripper"``) to I/O numbers. Returns the
+    (default: from the suffix, :data:`SUFFIXES`; a ``path`` without a suffix gets the
+    language's); KRL also writes the ``.dat`` beside the ``.src``. Each file is written
+    atomically. ``signals`` maps signal names (``"gripper"``) to I/O numbers. Returns the
     written paths. ProgramError for an unknown language or robot (nothing written)."""
     lang = language_of(path, language)
     prog: Program = from_sim(sim, robot, signals=signals)
     target = Path(path)
+    if not target.suffix:  # the controller knows a program by its suffix: give it one
+        target = target.with_suffix(next(k for k, v in SUFFIXES.items() if v == lang))
     files = _WRITERS[lang](prog, target.stem)
     written = [(target.with_suffix(s) if s == ".dat" else target, t) for s, t in files.items()]
     for p, text in written:
-        p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_text(text, encoding="utf-8")
+        make_folder(p.parent, error=ProgramError)
+        atomic_write_text(p, text, error=ProgramError)
     return [str(p) for p, _ in written]
 
 

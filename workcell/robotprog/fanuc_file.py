@@ -46,6 +46,8 @@ def positions(lines: list[tuple[int, str]], path: str) -> dict[int, Position]:
         loc = Loc(path, line, 1)
         if "GP2" in body:
             raise error(loc, "positions of several motion groups are not supported")
+        if n in out:
+            raise error(loc, f"P[{n}] is defined twice in /POS (each position once)")
         pos = Position()
         uf = re.search(r"UF\s*:\s*(\d+)", body)
         ut = re.search(r"UT\s*:\s*(\d+)", body)

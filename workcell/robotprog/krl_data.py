@@ -158,7 +158,10 @@ class KrlData:
             for f in fields[:-1]:
                 holder = holder.setdefault(f, {})
             if not isinstance(holder, dict):
-                raise ProgramError(f"{t.text} has no fields")
+                raise ProgramError(
+                    f"{t.text} has no fields: it is a {type(holder).__name__} value, not a "
+                    "structure (E6POS, FRAME, ...)"
+                )
             holder[fields[-1]] = v
 
         return set_var

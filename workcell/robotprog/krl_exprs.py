@@ -56,7 +56,8 @@ class KrlExpressions:
             def set_number(vm: VM, v: Any) -> None:
                 x = number(v, full)
                 if x < 0 or (key == "ov" and not 0 < x <= 100):
-                    raise ProgramError(f"{full} = {x:g} is out of range")
+                    valid = "in (0, 100] %" if key == "ov" else ">= 0"
+                    raise ProgramError(f"{full} = {x:g} is out of range: it must be {valid}")
                 vm.lang[key] = x
 
             return set_number

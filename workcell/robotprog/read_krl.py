@@ -288,9 +288,15 @@ class KrlReader(KrlData, KrlExpressions, Reader):
         step: Fn = lambda vm: 1  # noqa: E731
         if p.accept("STEP"):
             step_tok = p.tok
+            negative = p.accept("-") is not None
+            if not negative:
+                p.accept("+")
+            if p.tok.kind != "num":
+                raise error(step_tok.loc, "STEP must be a constant number (e.g. STEP -2)")
             step = self.ex.parse()
-            if step_tok.kind not in ("num", "op"):
-                raise error(step_tok.loc, "STEP must be a constant")
+            if negative:
+                k = step
+                step = lambda vm: -k(vm)  # noqa: E731
         p.end_line()
         body = lambda done: self._to_end(code, "ENDFOR", done)  # noqa: E731
         variable_loop(code, t.loc, var, start, stop, step, body, whole=True)

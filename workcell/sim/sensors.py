@@ -41,6 +41,8 @@ class SensorReader:
         for b in range(1, model.nbody):
             robot_body[b] = model.body(b).name.startswith(prefixes) if prefixes else False
         self.robot_body = robot_body
+        # a ray passes each robot body at most once on its way to what it sees
+        self._hops = int(robot_body.sum()) + 1
         self.tool_sites = np.array(
             [model.site(cc.tool_sites[r]).id for r in cc.tool_sites], dtype=np.intp
         )
@@ -90,10 +92,11 @@ class SensorReader:
         self, start: Array, vec: Array, reach: float, static: bool, robots: bool
     ) -> float | None:
         """The first hit (in units of ``vec``) within ``reach`` along ``start + x vec``,
-        skipping robot bodies unless ``robots``; None when nothing is hit."""
+        skipping robot bodies unless ``robots`` (the ray goes on from where it meets one,
+        that body left out, past every robot body if need be); None when nothing is hit."""
         m, d = self.model, self.data
         pnt, travelled, exclude = np.array(start, dtype=np.float64), 0.0, -1
-        for _ in range(8):
+        for _ in range(self._hops):
             x = mujoco.mj_ray(m, d, pnt, vec, self.groups, static, exclude, self._hit)
             if x < 0 or travelled + x > reach:
                 return None
