@@ -302,7 +302,9 @@ def decompositions(
     for i, d in enumerate(out):
         if d is None:
             first.setdefault(paths[i], i)
-    todo = list(first.values())
+    # the largest meshes first: the cores stay busy to the end (the longest-first rule;
+    # CoACD's time grows with the mesh), and the results still come back in order
+    todo = sorted(first.values(), key=lambda i: -len(meshes[i].faces))
     fit = None if hull_fit is None else (float(hull_fit.distance), float(hull_fit.volume))
     jobs = [
         native.Job(
