@@ -316,6 +316,7 @@ class Viewer:
         """The painter thread: redraws the panels a moment after events (off the
         program's thread, so a program never waits for them), and the run state."""
         shown = ""
+        busy_since = 0.0
         while not self._closed:
             if self._dirty.wait(0.3):
                 self._dirty.clear()
@@ -323,8 +324,13 @@ class Viewer:
                 try:
                     if pending is not None:
                         self._push_state(*pending)
-                    wait = _PANELS_INTERVAL * (4 if self.busy else 1)  # less while running
-                    if time.perf_counter() - self._panels_at > wait:
+                    busy, now = self.busy, time.perf_counter()
+                    if busy and shown != "busy" and busy_since < self._panels_at:
+                        busy_since = now  # a run starts: its panels wait (not at once)
+                    # less while running: every second, not before a second of the run
+                    wait = _PANELS_INTERVAL * (4 if busy else 1)
+                    last = max(self._panels_at, busy_since) if busy else self._panels_at
+                    if now - last > wait:
                         self._panels_from_sim()
                         self._panels_at = time.perf_counter()
                     else:
