@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import Any
 
@@ -22,7 +23,7 @@ from workcell.robotprog.source import Loc, Parser, Token, error
 __all__ = ["Reader", "branch", "variable_loop", "while_loop"]
 
 
-class Reader:
+class Reader(ABC):
     """Reads one program file at ``path``: :attr:`routines` (:class:`Code` by name, in the
     order defined) and :attr:`first`, the first one's name. A language's reader sets
     :attr:`language` (its name in messages), :attr:`binary` and :attr:`unary` (its
@@ -47,11 +48,13 @@ class Reader:
         self.ex = ExprParser(self.p, self.binary, self.unary, self.primary)
         return self.p
 
-    def primary(self) -> Fn:  # pragma: no cover - every language defines its own
-        raise NotImplementedError
+    @abstractmethod
+    def primary(self) -> Fn:
+        """An operand of an expression (each language's own)."""
 
-    def statement(self, code: Code, *context: Any) -> None:  # pragma: no cover - as primary
-        raise NotImplementedError
+    @abstractmethod
+    def statement(self, code: Code, *context: Any) -> None:
+        """Read one statement into ``code`` (each language's own)."""
 
     def define(self, name: Token, key: str, what: str) -> Code:
         """The code of a new routine ``key`` (its name as the language compares names)
