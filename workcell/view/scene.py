@@ -3,7 +3,7 @@
 :class:`Scene` builds, from a simulator's compiled model, one viser frame per body that
 has visual geoms (``/cell/<body>``, placed at the body's world pose) with its geoms as
 meshes in the body's frame, in the geom's colour (collision-only geoms, group 3, are
-left out; primitives become meshes; the ground plane becomes a floor quad under a grid).
+left out; primitives become meshes; the ground plane becomes a grid on the floor's colour).
 It adds axes at each robot's base and tool, a marker for contacts, and one line set
 per robot for its tool path. :meth:`Scene.show` poses every moving body from an
 ``MjData`` and paints the bodies in contact red, with a marker and the depth at each
@@ -145,19 +145,17 @@ class Scene:
         self._shown = np.full((len(self._ids), 7), np.nan)  # poses sent: xpos, xquat
 
     def _floor(self, model: mujoco.MjModel, g: int, extent: float) -> None:
+        # One node: the grid's own plane carries the floor's colour. A separate floor
+        # quad under the grid doubled the full-screen fragment work, which is most of a
+        # frame in a software-rendered browser (6 -> 10 frames a second, 1280 x 800).
         size = model.geom_size[g]
         half = [float(s) if s > 0 else 2.0 * extent for s in size[:2]]
         cells = max(0.1, round(extent / 5.0, 1))
+        rgba = geom_rgba(model, g)
         self.server.scene.add_grid(
             "/floor/grid", width=2 * half[0], height=2 * half[1], cell_size=cells,
-            section_size=5 * cells, position=(0.0, 0.0, 0.0005),
-        )  # fmt: skip
-        quad = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float32)
-        quad[:, :2] *= np.float32(half)
-        self.server.scene.add_mesh_simple(
-            "/floor/plane", vertices=quad, faces=np.array([[0, 1, 2], [0, 2, 3]], np.uint32),
-            color=_u8(geom_rgba(model, g)), side="double",
-            position=model.geom_pos[g].copy(), wxyz=model.geom_quat[g].copy(),
+            section_size=5 * cells, plane_color=_u8(rgba), plane_opacity=float(rgba[3]),
+            shadow_opacity=0.0, position=model.geom_pos[g].copy(), wxyz=model.geom_quat[g].copy(),
         )  # fmt: skip
 
     def show(self, data: mujoco.MjData, contacts: list[Contact] | None = None) -> None:
