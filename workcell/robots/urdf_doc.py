@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import os
+import stat
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -41,6 +42,7 @@ from workcell.robots.meshfile import load_mesh, primitive
 from workcell.robots.standin import Missing
 from workcell.robots.tree import Shape
 from workcell.spatial import rot_x, rot_y, rot_z, translation
+from workcell.tempfiles import kind
 
 __all__ = ["UrdfDoc"]
 
@@ -157,6 +159,10 @@ class UrdfDoc:
                 self.tried.append(f"{p} ({why.removeprefix('it ')}: not tried)")
             elif real.is_file():
                 return real
+            elif real.exists():  # a folder, FIFO, device: passed over, never opened
+                mode = real.stat().st_mode
+                what = "a folder" if stat.S_ISDIR(mode) else kind(mode)
+                self.tried.append(f"{p} ({what}, not a regular file)")
             else:
                 self.tried.append(str(p))
         return None
