@@ -15,7 +15,7 @@ from viewpage import open_view, panel_left, quiet_scene, screenshot
 from workcell.examples import thesis_handoff, thesis_pick_place
 from workcell.sim import Simulator
 from workcell.view import Viewer
-from workcell.view.cameras import View
+from workcell.view.cameras import View, apply_view
 
 pytestmark = pytest.mark.browser
 
@@ -153,7 +153,7 @@ def test_dragging_the_gizmo_moves_the_tool_by_ik(page):
         tool = T0[:3, 3]
         view = View(tool + np.array([0.25, -0.55, 0.25]), tool + np.array([0.12, 0.0, 0.0]),
                     np.array([0.0, 0.0, 1.0]), math.radians(45))  # fmt: skip
-        v._apply_view(view, None)
+        apply_view(v.server, view, None)
         page.wait_for_timeout(1500)
         w, h = page.viewport_size["width"], page.viewport_size["height"]
         x_axis = T0[:3, 0]
@@ -229,7 +229,7 @@ def test_a_collision_turns_the_part_red(page):
         c = np.array(sim.part_positions()["sphere"])
         view = View(c + np.array([0.0, -0.45, 0.12]), c, np.array([0.0, 0.0, 1.0]),
                     math.radians(45))  # fmt: skip
-        v._apply_view(view, None)
+        apply_view(v.server, view, None)
         for g in v.jog.gizmos.values():  # red x arrows of the gizmos and axes: away
             g.visible = False
         v.server.scene.add_frame("/axes", show_axes=False, visible=False)

@@ -40,6 +40,11 @@ resting on a support touches at a few micrometres): in physics a robot blocked b
 hits barely overlaps it, and shows up as a tracking error instead. (Grasps, releases,
 collisions and the plan's other events of a run: :mod:`workcell.sim.physics_events`;
 belts, sources, sinks and sensors: :mod:`workcell.sim.physics_devices`.)
+
+Listeners (``sim.physics_listeners``, the live view's): ``f(t, data, pairs, last)`` at each
+recorded frame, on the run's thread: ``data`` is the run's ``MjData`` with the poses and
+contacts of time ``t`` (s), ``pairs`` the (thing, thing) labels counted as colliding then,
+``last`` True for the settled end state. A listener reads ``data`` and does not keep it.
 """
 
 from __future__ import annotations
@@ -242,6 +247,7 @@ class _Run(PhysicsEvents):
         step, qpos, ctrl_in = mujoco.mj_step, d.qpos, d.ctrl
         xpos, xquat, sxpos, force = d.xpos, d.xquat, d.site_xpos, d.actuator_force
         tools, grips, record, clock = self.tool_ids, self.grip_ids, self.record, time.perf_counter
+        listeners = list(getattr(self.sim, "physics_listeners", ()))  # a live view, say
         try:
             for a, b in itertools.pairwise(bounds):
                 self._events_at(a)
@@ -263,9 +269,11 @@ class _Run(PhysicsEvents):
                     sb[j], gp[j], gq[j], fb[j] = sxpos[tools], xpos[grips], xquat[grips], force
                     if record[a + j]:
                         walls[j] = clock() - self.c0
-                        self._collisions(float(ts[j]))
+                        hits = self._collisions(float(ts[j]))
                         if devices is not None:
                             devices.sense(float(ts[j]))
+                        for listener in listeners:  # d's poses and contacts are at ts[j]
+                            listener(float(ts[j]), d, hits, False)
                 if any(d.warning[w].number for w in _BAD) or not np.all(np.isfinite(qpos)):
                     raise ProgramError(
                         f"the physics became unstable before t = {b * h:.4g} s (timestep "
@@ -280,6 +288,8 @@ class _Run(PhysicsEvents):
             self._events_at(n_end)
             mujoco.mj_forward(m, d)
             self._frames(np.array([n_end * h]), np.array([clock() - self.c0]), qpos[None, :])
+            for listener in listeners:
+                listener(n_end * h, d, [], True)
         finally:
             if bar is not None:
                 bar.close()

@@ -107,13 +107,15 @@ class PhysicsEvents:
                 keep.append((robot, part, adr, target))
         self.pending = keep
 
-    def _collisions(self: _Run, t: float) -> None:
+    def _collisions(self: _Run, t: float) -> list[tuple[str, str]]:
         """Collision events for the pairs that start touching at ``t`` (a pair apart for
-        less than :data:`_REARM` seconds is still the same collision)."""
+        less than :data:`_REARM` seconds is still the same collision); the pairs that
+        count as colliding at ``t``."""
         pens = self.monitor.penetrations(self.d)
         if not pens:
-            return
+            return []
         robot_of, tol, seen = self.monitor.robot_of, self.options["contact_tolerance"], self.seen
+        now = []
         for a, b, depth in pens:
             who = robot_of(a) or robot_of(b)
             if not (who or depth > tol):
@@ -121,3 +123,5 @@ class PhysicsEvents:
             if t - seen.get((a, b), -math.inf) > _REARM:
                 self._event(t, who, "collision", f"{a} with {b}: depth {depth * 1e3:.3g} mm")
             seen[(a, b)] = t
+            now.append((a, b))
+        return now

@@ -238,6 +238,11 @@ class Simulator(
         self._wall = 0.0
         # f(frame, t) each time data shows a frame (observers: workcell.sim.frames)
         self.frame_listeners: list[Callable[[int, float], None]] = []
+        # f(t, data, pairs, last) at each recorded frame of a physics replay of this
+        # simulator's program (workcell.sim.physics)
+        self.physics_listeners: list[
+            Callable[[float, mujoco.MjData, list[tuple[str, str]], bool], None]
+        ] = []
         self.timeline = Timeline(self.model.nq, memory_limit=memory_limit, spill_dir=spill_dir)
         self._logic = CellLogic.of(self)  # the devices (None: the cell has none)
         if self._logic is not None:

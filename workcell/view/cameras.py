@@ -21,9 +21,11 @@ from numpy.typing import NDArray
 from workcell.record.camera import camera_eye, overview_camera
 
 if TYPE_CHECKING:
+    import viser
+
     from workcell.robots.robot import Robot
 
-__all__ = ["View", "free_camera_view", "presets", "reach"]
+__all__ = ["View", "apply_view", "free_camera_view", "presets", "reach"]
 
 Array = NDArray[np.float64]
 
@@ -75,3 +77,18 @@ def reach(robot: Robot) -> float:
     Q = lo + np.random.default_rng(0).random((64, len(lo))) * (hi - lo)
     T = robot.fk_batch(Q)
     return float(max(0.3, np.max(np.linalg.norm(T[:, :3, 3], axis=1))))
+
+
+def apply_view(server: viser.ViserServer, v: View, client: viser.ClientHandle | None) -> None:
+    """Point one page's camera (``client``), else every page's and the initial one, at
+    ``v``."""
+    cams = [client.camera] if client is not None else [
+        c.camera for c in server.get_clients().values()]  # fmt: skip
+    ic = server.initial_camera
+    ic.position, ic.look_at, ic.up, ic.fov = tuple(v.eye), tuple(v.look_at), tuple(v.up), v.fov
+    for cam in cams:
+        with server.atomic():
+            cam.up_direction = tuple(v.up)
+            cam.position = tuple(v.eye)
+            cam.look_at = tuple(v.look_at)
+            cam.fov = v.fov

@@ -5,11 +5,13 @@ run (the simulator does so for every frame when it checks collisions) and keeps,
 :meth:`~workcell.sim.contacts.ContactMonitor.penetrations`, the pairs of different
 things overlapping by more than the tolerance and not excluded (a held part and its
 gripper): for each pair its deepest contact, with the contact point (m, world) and the
-depth (m), deepest first.
+depth (m), deepest first. With ``only`` (a physics replay's frames, whose run has decided
+which pairs collide) just those pairs, at any overlap.
 """
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from typing import NamedTuple
 
 import mujoco
@@ -30,14 +32,16 @@ class Contact(NamedTuple):
     point: NDArray[np.float64]
 
 
-def contacts(monitor: ContactMonitor, data: mujoco.MjData) -> list[Contact]:
+def contacts(monitor: ContactMonitor, data: mujoco.MjData, *,
+             only: Collection[tuple[str, str]] | None = None) -> list[Contact]:  # fmt: skip
     """The overlapping pairs of ``data``'s current contacts (module doc)."""
+    pairs = None if only is None else {(min(a, b), max(a, b)) for a, b in only}
     n = data.ncon
-    if n == 0:
+    if n == 0 or pairs == set():
         return []
     con = data.contact
     dist = con.dist[:n]
-    hits = np.flatnonzero(dist < -monitor.tolerance)
+    hits = np.flatnonzero(dist < (0.0 if pairs is not None else -monitor.tolerance))
     if len(hits) == 0:
         return []
     body = monitor.model.geom_bodyid
@@ -45,10 +49,10 @@ def contacts(monitor: ContactMonitor, data: mujoco.MjData) -> list[Contact]:
     for k in hits:
         g1, g2 = int(con.geom1[k]), int(con.geom2[k])
         b1, b2 = int(body[g1]), int(body[g2])
-        if (min(b1, b2), max(b1, b2)) in monitor.excluded:
+        if pairs is None and (min(b1, b2), max(b1, b2)) in monitor.excluded:
             continue
         la, lb = sorted((monitor.labels[g1], monitor.labels[g2]))
-        if la == lb:
+        if la == lb or (pairs is not None and (la, lb) not in pairs):
             continue
         depth = -float(dist[k])
         if depth > (best[(la, lb)].depth if (la, lb) in best else 0.0):

@@ -34,6 +34,17 @@ _G = mujoco.mjtGeom
 Array = NDArray[np.float64]
 
 
+def stage(server: viser.ViserServer) -> None:
+    """An empty scene, z up, with plain lights (no environment map to load and fade in:
+    steady colours at once; no shadows: ten times the work in a software browser)."""
+    server.scene.reset()
+    server.scene.set_up_direction("+z")
+    server.scene.configure_environment_map(None)
+    server.scene.configure_default_lights(cast_shadow=False)
+    server.scene.add_light_hemisphere("/lights/sky", sky_color=(255, 255, 255),
+                                      ground_color=(120, 120, 130), intensity=2.0)  # fmt: skip
+
+
 def geom_rgba(model: mujoco.MjModel, g: int) -> NDArray[np.float64]:
     """A geom's colour (0..1): its rgba, else its material's (MuJoCo's rule)."""
     rgba = model.geom_rgba[g]

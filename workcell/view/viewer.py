@@ -3,7 +3,8 @@
 ``Viewer(sim)`` starts a viser server (on loopback, behind a random token: see
 :mod:`workcell.view.guard`) and hangs two listeners on the simulator
 (``sim.frame_listeners``, ``sim.event_listeners``): whatever runs the simulator (Python,
-the command language, the server) is shown as it happens.
+the command language, the server) is shown as it happens; a third
+(``sim.physics_listeners``) shows a physics replay (``run_physics``) as it runs.
 
 Pacing: with ``speed`` (default 1.0) each frame is shown when the wall clock has run its
 simulated time / speed since the command began (the simulator waits, in the listener, for
@@ -38,10 +39,10 @@ import numpy as np
 from workcell.checks import is_finite_number
 from workcell.errors import ProgramError
 from workcell.sim.timeline import Event
-from workcell.view.cameras import View, presets, reach
+from workcell.view.cameras import View, apply_view, presets, reach
 from workcell.view.contacts import contacts
 from workcell.view.guard import LOOPBACK, Guard, new_token, start_server, stop_quietly
-from workcell.view.scene import Scene
+from workcell.view.scene import Scene, stage
 from workcell.view.timeline import TimelinePanel
 
 if TYPE_CHECKING:
@@ -92,6 +93,7 @@ class Viewer:
         self._anchor: tuple[float, float] | None = None  # (wall, sim time) of pacing
         self._last_push = 0.0
         self._shown_at: tuple[int, float] | None = None  # the (frame, t) the page shows
+        self._physics_at: tuple[float, bool] | None = None  # (t, last) of a physics frame
         self._last_frame = 0.0
         self._own = False  # the page's own jog is running (its frames are not 'busy')
         self._commands = 0  # commands of a followed session running now
@@ -153,13 +155,7 @@ class Viewer:
         self._panels = []
         self.sim = sim
         self._shown_at = None
-        self.server.scene.reset()
-        self.server.scene.set_up_direction("+z")
-        # plain lights (no environment map to load and fade in): steady colours at once
-        self.server.scene.configure_environment_map(None)
-        self.server.scene.configure_default_lights(cast_shadow=False)  # shadows: 10x the work
-        self.server.scene.add_light_hemisphere("/lights/sky", sky_color=(255, 255, 255),
-                                               ground_color=(120, 120, 130), intensity=2.0)  # fmt: skip
+        stage(self.server)
         cc, m = sim.compiled, sim.model
         bases = {r: p.world_base for r, p in sim.cell.robots.items()}
         self.scene = Scene(self.server, m, sim.data, labels=sim.contacts.labels,
@@ -168,7 +164,7 @@ class Viewer:
         self._views = presets(m, sim.data, bases, reaches, dict(cc.cameras))
         self.camera_choice.options = tuple(self._views)
         self.camera_choice.value = "overview"
-        self._apply_view(self._views["overview"], None)
+        apply_view(self.server, self._views["overview"], None)
         self._paint_data = mujoco.MjData(m)
         self.timeline_panel.reset(sim)
         from workcell.view.jog import JogPanel
@@ -179,6 +175,7 @@ class Viewer:
         self._panels = [self.jog, self.program]
         sim.frame_listeners.append(self._on_frame)
         sim.event_listeners.append(self._on_event)
+        sim.physics_listeners.append(self._on_physics)
         self.refresh()
 
     def follow(self, session: Any) -> None:
@@ -209,6 +206,8 @@ class Viewer:
             sim.frame_listeners.remove(self._on_frame)
         if self._on_event in sim.event_listeners:
             sim.event_listeners.remove(self._on_event)
+        if self._on_physics in sim.physics_listeners:
+            sim.physics_listeners.remove(self._on_physics)
 
     # ------------------------------------------------------------------ the page
     def _build_page(self) -> None:
@@ -248,22 +247,10 @@ class Viewer:
             with self._resume:
                 self._resume.notify_all()
 
-    def _apply_view(self, v: View, client: Any) -> None:
-        cams = [client.camera] if client is not None else [
-            c.camera for c in self.server.get_clients().values()]  # fmt: skip
-        ic = self.server.initial_camera
-        ic.position, ic.look_at, ic.up, ic.fov = tuple(v.eye), tuple(v.look_at), tuple(v.up), v.fov
-        for cam in cams:
-            with self.server.atomic():
-                cam.up_direction = tuple(v.up)
-                cam.position = tuple(v.eye)
-                cam.look_at = tuple(v.look_at)
-                cam.fov = v.fov
-
     def _camera_chosen(self, event: Any) -> None:
         v = self._views.get(self.camera_choice.value)
         if v is not None and event.client is not None:
-            self._apply_view(v, event.client)
+            apply_view(self.server, v, event.client)
 
     # ------------------------------------------------------------------ listeners
     def _on_frame(self, frame: int, t: float) -> None:
@@ -282,16 +269,45 @@ class Viewer:
         if self.speed is None and not replay:
             return
         if self.speed is not None and not replay:
-            if self._anchor is None or t < self._anchor[1]:
-                self._anchor = (now, t)
-            due = self._anchor[0] + (t - self._anchor[1]) / self.speed
-            if due - now > 0:
-                time.sleep(due - now)
-                now = time.perf_counter()
-            elif now - due > 0.1:  # far behind (a slow command, idle before): start again
-                self._anchor = (now, t)
+            now = self._pace(t, now)
         if now - self._last_push >= _PUSH_INTERVAL:
             self._push(frame, t)
+
+    def _pace(self, t: float, now: float) -> float:
+        """Wait until simulated time ``t`` (s) is due at ``speed`` x real time; the wall
+        clock (s) after the wait."""
+        assert self.speed is not None
+        if self._anchor is None or t < self._anchor[1]:
+            self._anchor = (now, t)
+        due = self._anchor[0] + (t - self._anchor[1]) / self.speed
+        if due - now > 0:
+            time.sleep(due - now)
+            now = time.perf_counter()
+        elif now - due > 0.1:  # far behind (a slow command, idle before): start again
+            self._anchor = (now, t)
+        return now
+
+    def _on_physics(self, t: float, data: mujoco.MjData, pairs: list[tuple[str, str]],
+                    last: bool) -> None:  # fmt: skip
+        """Physics listener (``run_physics``): the replay's frames, paced like a command's
+        (``speed=None``: at most 20 a second), its collisions red; its end state stays on
+        the page, marked as the physics run's, until the next picture."""
+        if self._clients == 0 or self._closed or self.scene is None or self.sim is None:
+            return
+        now = self._last_frame = time.perf_counter()
+        if self._paused:
+            self._wait_resumed()
+            now = time.perf_counter()
+        if self.speed is not None:
+            now = self._pace(t, now)
+        gap = _PUSH_INTERVAL if self.speed is not None else _END_STATE_INTERVAL
+        if not last and now - self._last_push < gap:
+            return
+        self.scene.show(data, contacts(self.sim.contacts, data, only=pairs))
+        self._physics_at = (t, last)
+        self._last_push = time.perf_counter()
+        self.pushes += 1
+        self._status()
 
     def _wait_resumed(self) -> None:
         with self._resume:
@@ -370,6 +386,7 @@ class Viewer:
         d = sim.data if data is None else data
         touching = contacts(sim.contacts, d) if (sim.check_collisions or data is not None) else []
         self.scene.show(d, touching)
+        self._physics_at = None
         live = live or data is None
         self._scrubbed = None if live else frame
         self._shown_at = (frame, t)
@@ -395,6 +412,11 @@ class Viewer:
             state = "timeline (scrubbing)"
         red = sorted(self.scene.red) if self.scene is not None else []
         hit = f" · contact: {', '.join(red)}" if red else ""
+        if self._physics_at is not None:  # a physics replay's frame (not the timeline's)
+            t, done = self._physics_at
+            run = "its end state" if done else "running"
+            self.status.content = f"**t = {t:.3f} s** · physics replay (mj_step) · {run}{hit}"
+            return
         self.status.content = (
             f"**t = {t:.3f} s** · frame {frame} of {len(sim.timeline) - 1} · {state}{hit}"
         )
