@@ -95,7 +95,14 @@ def cell_with_more_sensors():
     for k, dx in enumerate((0.0, -0.4)):
         cell.add_sensor(f"beam{k}", "beam", start=(x + dx, y - 0.2, z), end=(x + dx, y + 0.2, z))
         cell.add_sensor(f"zone{k}", "presence", center=(x + dx - 0.2, y, z), size=(0.2, 0.2, 0.1))
-    cell.add_sensor("gap", "proximity", origin=(x - 0.6, y, 1.0), direction=(0, 0, -1), range=1.0, threshold=0.55)
+    cell.add_sensor(
+        "gap",
+        "proximity",
+        origin=(x - 0.6, y, 1.0),
+        direction=(0, 0, -1),
+        range=1.0,
+        threshold=0.55,
+    )
     return cell
 
 

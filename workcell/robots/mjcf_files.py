@@ -273,7 +273,6 @@ class _Reader:
                     self.out.assets[self.key(full, "f")] = data
                 el.set(attr, self.keys[full])
 
-
     def absent(self, doc: _Doc, el: ET.Element, value: str, full: str) -> bool:
         """Whether mesh or texture file ``full`` is left unread: not wanted (only the
         kinematics are), or found nowhere and so listed in ``missing``

@@ -27,9 +27,7 @@ PLACEHOLDER = "workcell_standin"  # name prefix of the placeholder geoms
 _SIZE = 0.005  # m: a placeholder sphere's radius
 
 
-def stand_in_missing(
-    spec: mujoco.MjSpec, absent: Collection[str]
-) -> tuple[set[str], set[str]]:
+def stand_in_missing(spec: mujoco.MjSpec, absent: Collection[str]) -> tuple[set[str], set[str]]:
     """Stand in for the meshes and textures of ``spec`` whose files (asset names, as
     :func:`~workcell.robots.mjcf_files.read_mjcf` gave them) are ``absent`` (module doc);
     (the names of the placeholder geoms, the names of the bodies whose inertia the file
