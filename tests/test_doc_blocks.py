@@ -182,8 +182,10 @@ def same_json(a: object, b: object, rel: float = 1e-9) -> bool:
     if isinstance(a, float) or isinstance(b, float):
         if isinstance(a, bool) or isinstance(b, bool):
             return a == b
-        return isinstance(a, int | float) and isinstance(b, int | float) and math.isclose(
-            a, b, rel_tol=rel, abs_tol=1e-12
+        return (
+            isinstance(a, int | float)
+            and isinstance(b, int | float)
+            and math.isclose(a, b, rel_tol=rel, abs_tol=1e-12)
         )
     return a == b
 

@@ -95,7 +95,9 @@ def test_the_nearest_is_kept_when_its_move_is_clear():
     sim = Simulator(cell)
     sim.move_end_effector("ur", T)
     np.testing.assert_allclose(sim.joints("ur"), near.q, atol=1e-9)
-    assert f"configuration '{near.config}', the nearest (its move is clear)" in moves(sim)[-1].detail
+    assert (
+        f"configuration '{near.config}', the nearest (its move is clear)" in moves(sim)[-1].detail
+    )
 
 
 def test_when_no_move_is_clear_the_nearest_is_taken_and_the_event_says_so():

@@ -256,6 +256,8 @@ def test_a_robot_without_named_poses_says_so_in_words():
     s.cell = Workcell("empty")
     with pytest.raises(CommandSyntaxError) as info:
         list(parse_line("move joints absolute r home", s))
-    assert str(info.value).splitlines()[0].endswith(
-        "unknown robot 'r'; valid here: none (no robot yet)"
+    assert (
+        str(info.value)
+        .splitlines()[0]
+        .endswith("unknown robot 'r'; valid here: none (no robot yet)")
     )

@@ -85,9 +85,7 @@ def test_a_bad_first_line_gets_one_reply_one_short_log_line_and_a_closed_connect
     assert all(len(rec.getMessage()) < 400 for rec in lines)
 
 
-def test_the_same_lines_after_the_hello_are_typed_errors_and_the_connection_goes_on(
-    server, caplog
-):
+def test_the_same_lines_after_the_hello_are_typed_errors_and_the_connection_goes_on(server, caplog):
     with caplog.at_level(logging.INFO, logger="workcell.server"), Client(port=server.port) as c:
         for line in (DEEP, BIG_INT, b'{"id": 1, "command": "list", "args": [' + BIG_INT + b"]}"):
             c._sock.sendall(line + b"\n")

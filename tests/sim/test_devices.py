@@ -257,7 +257,9 @@ def test_a_part_is_picked_off_a_running_belt_where_it_is_at_that_frame():
     assert sim.close_gripper(cv.ROBOT) == "box_1"
     # the weld holds the part where it was at that frame (the tool point is at `pick`)
     grasp = next(g for g in sim.grasps if g.kind == "grasp")
-    T = sim.gripper_pose(cv.ROBOT) @ np.vstack([np.column_stack([np.eye(3), grasp.pos]), [0, 0, 0, 1]])
+    T = sim.gripper_pose(cv.ROBOT) @ np.vstack(
+        [np.column_stack([np.eye(3), grasp.pos]), [0, 0, 0, 1]]
+    )
     assert np.allclose(T[:3, 3] + np.array(cv.BOX) / 2, at_grasp, atol=1e-9)
     sim.move_linear(cv.ROBOT, tool_down(pick + np.array([0, 0, 0.1])), speed=0.25)
     # lifted with the gripper, no longer carried along by the belt

@@ -147,9 +147,7 @@ place brick on stage with arm
 ROBOTS = ("puma260", "ur3e", "kuka_kr6_r700", "abb_irb120", "fanuc_lrmate200id")
 
 
-def test_a_pick_and_place_study_of_a_tall_part_over_five_robots_has_feasible_rows(
-    tmp_path, capsys
-):
+def test_a_pick_and_place_study_of_a_tall_part_over_five_robots_has_feasible_rows(tmp_path, capsys):
     # the user's steps (issue 19): every row was a CollisionError, the palm in the part
     script = tmp_path / "tall.wcl"
     script.write_text(TALL_PICK_PLACE)
