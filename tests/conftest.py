@@ -15,12 +15,16 @@ loaded machine must not fail a test); ``explore``: random examples on every run,
 many as each test asks for, failures kept in ``.hypothesis/`` and replayed first
 (``WORKCELL_HYPOTHESIS=explore make test``, or add ``--hypothesis-seed=N`` to replay one
 exploration).
+
+Ctrl-C works in the processes tests start even when the suite runs as a background job
+(which inherits SIGINT ignored; see below).
 """
 
 from __future__ import annotations
 
 import os
 import shutil
+import signal
 import tempfile
 from pathlib import Path
 
@@ -39,6 +43,14 @@ _profile = os.environ.get(HYPOTHESIS_PROFILE, "ci")
 if _profile not in ("ci", "explore"):
     raise pytest.UsageError(f"{HYPOTHESIS_PROFILE}={_profile!r}: valid: ci, explore")
 settings.load_profile(_profile)
+
+# A suite started as a background job of a script (``make test &``, ``nohup ... &``)
+# inherits SIGINT ignored, and so would every process a test starts: Python keeps an
+# inherited SIG_IGN, and the tests that press Ctrl-C on a server or a command would wait
+# for an exit that never comes. A handler (not SIG_IGN) makes children start as from a
+# terminal (exec resets handlers to the default).
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_configure(config: pytest.Config) -> None:
