@@ -34,18 +34,7 @@ from websockets.sync.client import connect
 from workcell.examples import thesis_handoff
 from workcell.sim import Simulator
 from workcell.view import Viewer
-
-ARGS = ["--no-sandbox", "--use-gl=angle", "--use-angle=swiftshader",
-        "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]  # fmt: skip
-WATCH = """() => {
-  window.__seen = [];
-  const read = () => {
-    const m = document.body.innerText.match(/t = ([0-9.]+) s · frame (\\d+)/);
-    const last = window.__seen[window.__seen.length - 1];
-    if (m && (!last || last[1] !== +m[2])) window.__seen.push([+m[1], +m[2], performance.now()]);
-  };
-  window.__watch = setInterval(read, 5);
-}"""
+from workcell.view.headless import CHROMIUM, CHROMIUM_ARGS, WATCH_FRAMES
 
 
 def descendants() -> list[int]:
@@ -133,7 +122,7 @@ def main() -> None:
     cell = thesis_handoff.build()
     program = thesis_handoff.program
     with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=ARGS)
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         w, h = (int(x) for x in a.size.split("x"))
         page = browser.new_page(viewport={"width": w, "height": h})
         print(f"a {w} x {h} page in Chromium (software WebGL)")
@@ -162,7 +151,7 @@ def main() -> None:
         viewer.speed = 1.0
         viewer.attach(s)
         time.sleep(1.0)
-        page.evaluate(WATCH)
+        page.evaluate(WATCH_FRAMES)
         wire = WireCounter(viewer)
         time.sleep(0.5)
         pushes0 = viewer.pushes
@@ -208,7 +197,7 @@ def main() -> None:
             b._impl.update_cb[:] = [lambda e, b=b: typed("puma_1", e)]
         viewer._push = push
         for k in range(a.jogs):
-            page.evaluate(WATCH)
+            page.evaluate(WATCH_FRAMES)
             page.wait_for_timeout(100)
             value = 10.0 + (k % 5)
             page.evaluate("() => { window.__t0 = performance.now(); }")

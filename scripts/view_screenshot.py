@@ -17,9 +17,7 @@ from playwright.sync_api import sync_playwright
 from workcell.examples import thesis_pick_place
 from workcell.sim import Simulator
 from workcell.view import Viewer
-
-ARGS = ["--no-sandbox", "--use-gl=angle", "--use-angle=swiftshader",
-        "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]  # fmt: skip
+from workcell.view.headless import CHROMIUM, CHROMIUM_ARGS
 
 
 def main() -> None:
@@ -30,7 +28,7 @@ def main() -> None:
     w, h = a.width, a.width * 5 // 8
     sim = Simulator(thesis_pick_place.build())
     with Viewer(sim, speed=None) as v, sync_playwright() as p:
-        browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=ARGS)
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         page = browser.new_page(viewport={"width": w, "height": h})
         page.goto(v.url)
         while v.clients == 0:

@@ -9,6 +9,8 @@ import subprocess
 import sys
 import textwrap
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -52,6 +54,27 @@ def children_of(pid: int) -> list[int]:
         if ppid == pid and b"workcell.native" in cmd and state != "Z":
             out.append(int(d.name))
     return out
+
+
+@contextmanager
+def ctrl_c_after(seconds: float) -> Iterator[None]:
+    """Ctrl-C (a KeyboardInterrupt in this thread) ``seconds`` s into the block; the
+    block must take it within 10 s and leave no workcell.native child behind."""
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGALRM, interrupt)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    t0 = time.monotonic()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    assert time.monotonic() - t0 < 10
+    assert children_of(os.getpid()) == []
 
 
 def test_a_job_comes_back_with_the_childs_result():
@@ -148,20 +171,8 @@ def test_out_of_memory_in_the_child_is_a_model_error():
 
 
 def test_ctrl_c_stops_the_children_at_once():
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-
-    old = signal.signal(signal.SIGALRM, interrupt)
-    signal.setitimer(signal.ITIMER_REAL, 1.5)
-    t0 = time.monotonic()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            decompose.decompose(torus(), label="block 'torus'")
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
-    assert time.monotonic() - t0 < 10
-    assert children_of(os.getpid()) == []
+    with ctrl_c_after(1.5):
+        decompose.decompose(torus(), label="block 'torus'")
 
 
 def test_children_die_with_a_killed_parent(tmp_path):

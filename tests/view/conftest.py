@@ -9,7 +9,9 @@ import os
 from collections.abc import Iterator
 
 import pytest
-from viewpage import ARGS, CHROMIUM, HEIGHT, WIDTH
+from viewpage import HEIGHT, WIDTH
+
+from workcell.view.headless import CHROMIUM, CHROMIUM_ARGS
 
 
 def pytest_collection_modifyitems(config, items):
@@ -29,7 +31,7 @@ def browser() -> Iterator[object]:
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         yield b
         b.close()
 

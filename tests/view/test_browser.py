@@ -16,6 +16,7 @@ from workcell.examples import thesis_handoff, thesis_pick_place
 from workcell.sim import Simulator
 from workcell.view import Viewer
 from workcell.view.cameras import View, apply_view
+from workcell.view.headless import WATCH_FRAMES
 
 pytestmark = pytest.mark.browser
 
@@ -180,17 +181,6 @@ def test_dragging_the_gizmo_moves_the_tool_by_ik(page):
         assert abs((T[:3, 3] - tool) @ T0[:3, 1]) < 1e-3
 
 
-_WATCH = """() => {
-  window.__seen = [];
-  const read = () => {
-    const m = document.body.innerText.match(/t = ([0-9.]+) s · frame (\\d+)/);
-    const last = window.__seen[window.__seen.length - 1];
-    if (m && (!last || last[1] !== +m[2])) window.__seen.push([+m[1], +m[2], performance.now()]);
-  };
-  window.__watch = setInterval(read, 5);
-}"""
-
-
 def test_a_run_shows_its_frames_as_they_are_made(page):
     """At speed 1 a 2 s move is shown frame after frame on the page (many distinct
     frames, in order, with their simulated times) and takes about 2 s of wall time. (A
@@ -199,7 +189,7 @@ def test_a_run_shows_its_frames_as_they_are_made(page):
     page.set_viewport_size({"width": 400, "height": 300})
     sim, v = _pick_place_view(page, speed=1.0)
     with v:
-        page.evaluate(_WATCH)
+        page.evaluate(WATCH_FRAMES)
         q = sim.joints("puma") + np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.6])  # rad
         t0 = time.perf_counter()
         sim.move_joints_absolute("puma", q)  # 0.6 rad at 0.3 rad/s: 2 s

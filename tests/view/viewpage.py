@@ -3,14 +3,10 @@ taken by the suite's root)."""
 
 from __future__ import annotations
 
-import os
 import time
 
 import numpy as np
 
-CHROMIUM = os.environ.get("WORKCELL_CHROMIUM", "/usr/bin/chromium")
-ARGS = ["--no-sandbox", "--use-gl=angle", "--use-angle=swiftshader",
-        "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]  # fmt: skip
 WIDTH, HEIGHT = 1280, 800
 
 
